@@ -1,0 +1,282 @@
+/**
+ * @file hstpf.h
+ * @brief hstpf: online state, running-resistance and train-type estimation
+ * for a high-speed train, by a bank of particle filters with Bayesian model
+ * weights (Xie et al., "An Online State and Parameter Estimation of Dynamic
+ * State Space Model of High Speed Train"). See docs/model.md.
+ *
+ * Model, per step of length T seconds (units: docs/model.md):
+ *   s' = s + T v + w_s
+ *   v' = v + T xi (u - W(v) - g(s)) + w_v,   W(v) = c0 + c1 V + c2 V^2,
+ *   y  = s + e,                               V = 3.6 v (km/h),
+ * xi = 9.81 / (1 + gamma) / 1000 (m/s^2 per N/kN), u and W in N/kN,
+ * g(s) = i + 600 / R from the optional track profile.
+ *
+ * Memory: the caller owns one hstpf_t (static, or on a large enough stack);
+ * the library never allocates. Time: hstpf_step() costs O(models x
+ * particles) with a fixed bound, no loops that depend on data beyond that
+ * (the track look-up walks at most the number of segments the cloud moved).
+ * Thread safety: an instance must not be used from two threads at once;
+ * different instances are independent. All functions are reentrant.
+ */
+#ifndef HSTPF_HSTPF_H
+#define HSTPF_HSTPF_H
+
+#include "hstpf/common.h"
+#include "hstpf/dist.h"
+#include "hstpf/rng.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Largest step length accepted, s. */
+#define HSTPF_DT_MAX_S 60.0
+/** Largest |unit traction or braking force| accepted, N/kN. */
+#define HSTPF_U_MAX 1000.0
+/** Largest |position| accepted, m (100 000 km). */
+#define HSTPF_POS_MAX_M 1.0e8
+/** Largest |speed| accepted in a prior, m/s. */
+#define HSTPF_SPEED_MAX 200.0
+
+/** Davis resistance coefficients of one train type (units of Table 1). */
+typedef struct {
+    const char *name; /**< display name, may be NULL */
+    double c0;        /**< N/kN, in [0, 50] */
+    double c1;        /**< N/kN per km/h, in [0, 1] */
+    double c2;        /**< N/kN per (km/h)^2, in [0, 0.01] */
+} hstpf_theta_t;
+
+/** Number of rows in hstpf_train_types. */
+#define HSTPF_N_TRAIN_TYPES 17
+/** The 17 rows of Table 1 of the paper, in its order (CRH1 first). */
+extern const hstpf_theta_t hstpf_train_types[HSTPF_N_TRAIN_TYPES];
+
+/**
+ * @brief Index of a Table 1 row by name (exact, case-sensitive, e.g. "CRH3",
+ * "SS1/SS3/SS4"), or -1 if there is none or name is NULL. Cost O(17).
+ */
+int32_t hstpf_train_type_find(const char *name);
+
+/**
+ * @brief Running resistance W at speed v, N/kN: c0 + c1 V + c2 V^2,
+ * V = 3.6 v km/h. Returns 0 if th is NULL. Cost O(1).
+ */
+double hstpf_resistance(const hstpf_theta_t *th, double v_mps);
+
+/** One track segment, from start_m to the next segment's start. */
+typedef struct {
+    double start_m;            /**< segment start, m, increasing */
+    double gradient_permille;  /**< i, per mille, + uphill, in [-100, 100] */
+    double curve_radius_m;     /**< R, m; 0 = straight, else >= 100 */
+} hstpf_track_seg_t;
+
+/** How particle weights update the model weights. */
+typedef enum {
+    /** log p(y_k | y_1:k-1, theta_l) = logsumexp_i(log W_k-1^i + l_k^i):
+     *  the model's marginal likelihood; correct with adaptive resampling. */
+    HSTPF_WEIGHT_MARGINAL = 0,
+    /** The paper's Eq. 13: likelihood of the model's posterior mean. */
+    HSTPF_WEIGHT_PAPER = 1
+} hstpf_weight_method_t;
+
+/** When particles are resampled. */
+typedef enum {
+    HSTPF_RESAMPLE_ALWAYS = 0, /**< every measurement step (the paper) */
+    HSTPF_RESAMPLE_ESS = 1     /**< when ESS < ess_threshold x particles */
+} hstpf_resample_t;
+
+/** Configuration; fill with hstpf_config_default() then change fields. */
+typedef struct {
+    const hstpf_theta_t *models; /**< n_models rows, read during init only */
+    uint16_t n_models;           /**< 1..HSTPF_MAX_MODELS */
+    uint16_t n_particles;        /**< 2..HSTPF_MAX_PARTICLES (default 100) */
+    uint64_t seed;               /**< RNG seed; model l uses stream l */
+    double gamma_rot;            /**< rotating-mass factor, [0, 1] (0.06) */
+    hstpf_dist_spec_t noise_s;   /**< w_s, m per step (N(0, sqrt 0.02)) */
+    hstpf_dist_spec_t noise_v;   /**< w_v, m/s per step (N(0, sqrt 0.05)) */
+    hstpf_dist_spec_t noise_e;   /**< e, m (N(0, sqrt 5)) */
+    /** Noise samples are scaled by sqrt(T / dt_nominal_s): exact for a
+     *  Gaussian random walk, a first-order approximation otherwise (1 s). */
+    double dt_nominal_s;
+    double init_speed_mps;       /**< prior speed mean at the first fix (0) */
+    double init_speed_sd;        /**< prior speed sd, >= 0 (1 m/s) */
+    hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
+    double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
+    /** Roughening after resampling: jitter sd = k * spread * M^(-1/2) per
+     *  state, spread = max - min over the cloud; 0 = off (0.2). */
+    double roughening_k;
+    double rough_min_s;          /**< minimum roughening sd, m (0) */
+    double rough_min_v;          /**< minimum roughening sd, m/s (0) */
+    hstpf_weight_method_t weight_method; /**< (HSTPF_WEIGHT_MARGINAL) */
+    /** Floor on every model weight q_l after normalisation, so that a model
+     *  can recover when conditions change; [0, 1/n_models) (1e-6). */
+    double q_floor;
+    double declare_threshold;    /**< q above which a type may be declared (0.9) */
+    double declare_hold_s;       /**< tau: how long it must stay above (30 s) */
+    /** Measurements farther than this from the predicted position are
+     *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
+    double gate_m;
+    const hstpf_track_seg_t *track; /**< optional profile, copied at init */
+    uint16_t n_track;            /**< 0..HSTPF_MAX_TRACK_SEGMENTS */
+} hstpf_config_t;
+
+/** One step's inputs. */
+typedef struct {
+    double dt_s;         /**< step length T, (0, HSTPF_DT_MAX_S] */
+    double traction;     /**< u over the step, N/kN (+ traction, - braking) */
+    double position_m;   /**< measured position y, m (if has_position) */
+    uint8_t has_position; /**< 0: no measurement this step, predict only */
+} hstpf_input_t;
+
+/** Declaration status (Table 2, State A(2)). */
+typedef enum {
+    HSTPF_STATUS_UNDECIDED = 0, /**< no type declared yet */
+    HSTPF_STATUS_DECLARED = 1,  /**< a type is declared */
+    HSTPF_STATUS_CHANGED = 2    /**< a different type replaced the declared one */
+} hstpf_status_t;
+
+/** Per-model output. */
+typedef struct {
+    hstpf_real_t q;         /**< model weight q_l */
+    double position_m;      /**< posterior mean position, m */
+    hstpf_real_t speed_mps; /**< posterior mean speed, m/s */
+    hstpf_real_t ess;       /**< effective sample size after the update */
+    hstpf_real_t loglik;    /**< last log-likelihood increment of the model */
+    uint32_t floor_hits;    /**< steps where every particle was at the floor */
+} hstpf_model_out_t;
+
+/** Snapshot of the estimate after a step. */
+typedef struct {
+    uint32_t step;          /**< steps accepted so far */
+    double time_s;          /**< sum of accepted step lengths */
+    double position_m;      /**< blended position sum_l q_l s_l, m */
+    hstpf_real_t speed_mps; /**< blended speed, m/s */
+    hstpf_real_t theta[3];  /**< sum_l q_l theta_l (Table 2, State A(1)) */
+    hstpf_real_t resistance; /**< W(speed) with theta, N/kN */
+    int16_t best;           /**< index of the largest q_l */
+    int16_t declared;       /**< declared model index, -1 if none */
+    hstpf_status_t status;  /**< declaration status */
+    double decision_time_s; /**< time of the latest declaration, -1 if none */
+    uint16_t n_models;
+    hstpf_model_out_t model[HSTPF_MAX_MODELS];
+} hstpf_estimate_t;
+
+/* Private per-model state. */
+typedef struct {
+    hstpf_real_t s[HSTPF_MAX_PARTICLES];  /* position relative to origin */
+    hstpf_real_t v[HSTPF_MAX_PARTICLES];
+    hstpf_real_t lw[HSTPF_MAX_PARTICLES]; /* normalised log weights */
+    hstpf_rng_t rng;
+    hstpf_real_t c0, c1, c2;              /* c1, c2 converted to m/s */
+    double logq;
+    hstpf_real_t s_mean, v_mean, ess, loglik;
+    uint32_t floor_hits;
+    uint16_t track_hint;
+} hstpf_model_t;
+
+/**
+ * The instance. Caller-owned; all members are private and may change
+ * between versions. sizeof(hstpf_t) is O(HSTPF_MAX_MODELS x
+ * HSTPF_MAX_PARTICLES x 3 x sizeof(hstpf_real_t)) plus the noise tables;
+ * docs/footprint.md lists measured sizes.
+ */
+typedef struct {
+    uint32_t magic;
+    hstpf_config_t cfg;              /* models/track pointers cleared */
+    hstpf_model_t m[HSTPF_MAX_MODELS];
+    hstpf_theta_t theta[HSTPF_MAX_MODELS];
+    hstpf_dist_t ds, dv, de, unit;   /* noise tables; unit = N(0,1) */
+    hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS];
+    hstpf_real_t scratch[HSTPF_MAX_PARTICLES];
+    uint16_t counts[HSTPF_MAX_PARTICLES];
+    double origin_m;                 /* particles are relative to this */
+    double time_s;
+    double xi;
+    double held_s;                   /* time the current leader held q > thr */
+    double decision_time_s;
+    uint32_t steps;
+    int16_t leader, declared;
+    hstpf_status_t status;
+    uint8_t have_fix;
+} hstpf_t;
+
+/**
+ * @brief Fills cfg with the defaults listed beside each field: the paper's
+ * Case 1 noise, 100 particles, no models (set models and n_models).
+ * @return HSTPF_OK or HSTPF_E_NULL. Cost O(1).
+ */
+int32_t hstpf_config_default(hstpf_config_t *cfg);
+
+/**
+ * @brief Initialises an instance: validates cfg, copies the models and the
+ * track, builds the noise tables and seeds one RNG stream per model.
+ * Particles are drawn at the first step that carries a position:
+ * s = y - e_i (e_i from the measurement noise), v from the speed prior.
+ * @param f       caller-owned instance.
+ * @param f_size  sizeof(hstpf_t) as the caller sees it (HSTPF_E_ABI if it
+ *                differs from the library's: mismatched capacity macros).
+ * @param cfg     configuration (not kept; models and track are copied).
+ * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_ABI; HSTPF_E_SIZE (n_models,
+ *   n_particles, n_track); HSTPF_E_NONFINITE; HSTPF_E_RANGE (coefficients,
+ *   gamma_rot, prior, track values out of range, track not increasing);
+ *   HSTPF_E_CONFIG (enums, ess_threshold, q_floor, declare_threshold,
+ *   declare_hold_s, gate_m, dt_nominal_s, roughening values); HSTPF_E_DIST
+ *   (from hstpf_dist_init()). On error *f is unchanged.
+ * Cost: four hstpf_dist_init() calls; no memory besides *f.
+ */
+int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
+
+/**
+ * @brief Restarts the estimation with the same configuration: uniform model
+ * weights, no declaration, particles drawn again at the next fix.
+ * RNG streams continue (not re-seeded).
+ * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(models).
+ */
+int32_t hstpf_reset(hstpf_t *f);
+
+/**
+ * @brief Advances every model by one step and, with a position, updates
+ * particle weights, model weights and the declaration.
+ * Before the first fix, steps without a position only advance time.
+ * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_INIT; HSTPF_E_NONFINITE (dt,
+ *   traction or position NaN/Inf); HSTPF_E_DT; HSTPF_E_RANGE (|traction| >
+ *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M); HSTPF_E_OUTLIER (position
+ *   farther than gate_m from the blended prediction). On error *f is
+ *   unchanged and the next valid step proceeds normally.
+ * Cost: O(n_models x n_particles): per particle two RNG draws and table
+ * samples, the model update, one log-density and one exp look-up; per model
+ * one log(); bounded. Stack below 256 bytes; no other memory.
+ */
+int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
+
+/**
+ * @brief Writes the current estimate. Before the first fix the states are
+ * zero and the weights uniform.
+ * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(n_models).
+ */
+int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
+
+/**
+ * @brief Copies the particles of model `model` (absolute positions) into
+ * caller arrays of at least n_particles elements, and their normalised
+ * weights (may be NULL). For plots and tests.
+ * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_INIT; HSTPF_E_SIZE (model out of
+ *   range). Cost O(n_particles).
+ */
+int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s,
+                        hstpf_real_t *v, hstpf_real_t *w);
+
+/**
+ * @brief Additional track resistance i + 600 / R (N/kN) at absolute position
+ * pos_m of the instance's profile; 0 with no profile or before its first
+ * segment. @return HSTPF_E_NULL/HSTPF_E_INIT as for the others, else
+ * HSTPF_OK and *g_out set. Cost O(n_track).
+ */
+int32_t hstpf_track_resistance(const hstpf_t *f, double pos_m, double *g_out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* HSTPF_HSTPF_H */
