@@ -77,7 +77,7 @@ typedef struct {
     hstpf_real_t tail_lo[HSTPF_DIST_TAILN]; /* F^-1(2^(k-32)) */
     hstpf_real_t tail_hi[HSTPF_DIST_TAILN]; /* F^-1(1 - 2^(k-32)) */
     hstpf_real_t lp[HSTPF_DIST_LN];         /* log-density nodes */
-    hstpf_real_t lo, inv_dx;                /* grid start, 1 / spacing */
+    hstpf_real_t lo, dx, inv_dx;            /* grid start, spacing, 1 / spacing */
     hstpf_real_t tail_b[2], tail_c[2];      /* tails: left [0], right [1] */
     hstpf_real_t floor;                     /* absolute log-density floor */
     hstpf_real_t lp_max;                    /* maximum of lp[] */

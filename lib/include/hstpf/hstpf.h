@@ -168,7 +168,7 @@ typedef struct {
     hstpf_real_t v[HSTPF_MAX_PARTICLES];
     hstpf_real_t lw[HSTPF_MAX_PARTICLES]; /* normalised log weights */
     hstpf_rng_t rng;
-    hstpf_real_t c0, c1, c2;              /* c1, c2 converted to m/s */
+    hstpf_real_t k0, k1, k2;              /* xi c0, xi c1 3.6, xi c2 3.6^2 */
     double logq;
     hstpf_real_t s_mean, v_mean, ess, loglik;
     uint32_t floor_hits;
@@ -188,6 +188,8 @@ typedef struct {
     hstpf_theta_t theta[HSTPF_MAX_MODELS];
     hstpf_dist_t ds, dv, de, unit;   /* noise tables; unit = N(0,1) */
     hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS];
+    hstpf_real_t track_rel[HSTPF_MAX_TRACK_SEGMENTS]; /* starts - origin */
+    hstpf_real_t track_acc[HSTPF_MAX_TRACK_SEGMENTS]; /* xi (i + 600/R) */
     hstpf_real_t scratch[HSTPF_MAX_PARTICLES];
     uint16_t counts[HSTPF_MAX_PARTICLES];
     double origin_m;                 /* particles are relative to this */

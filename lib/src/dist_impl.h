@@ -1,0 +1,126 @@
+/* Inline table look-ups for the hot loop; dist.c exposes them as functions. */
+#ifndef HSTPF_DIST_IMPL_H
+#define HSTPF_DIST_IMPL_H
+
+#include <string.h>
+
+#include "hstpf/dist.h"
+
+#define HSTPF__QSHIFT (32 - HSTPF_DIST_QBITS)
+#define HSTPF__EXP_N 512
+
+/* 2^(-j/512), j = 0..512 */
+extern const hstpf_real_t hstpf__exp2_tab[HSTPF__EXP_N + 1];
+
+static inline int hstpf__log2u(uint32_t m) /* m > 0 */
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return 31 - __builtin_clz(m);
+#else
+    int k = 0;
+    while (m >>= 1) {
+        ++k;
+    }
+    return k;
+#endif
+}
+
+/* Tail bin: t in [0, 2^QSHIFT) maps to tail probability (t + 1) / 2^32,
+ * interpolated between nodes at powers of two. */
+static inline hstpf_real_t hstpf__dist_tail(const hstpf_real_t *tab, uint32_t t)
+{
+    const uint32_t m = t + 1u;
+    const int k = hstpf__log2u(m);
+    const uint32_t base = 1u << k;
+    hstpf_real_t frac;
+    if (k >= HSTPF__QSHIFT) {
+        return tab[HSTPF__QSHIFT];
+    }
+    frac = (hstpf_real_t)(m - base) / (hstpf_real_t)base;
+    return tab[k] + frac * (tab[k + 1] - tab[k]);
+}
+
+static inline hstpf_real_t hstpf__dist_sample(const hstpf_dist_t *d, uint32_t r)
+{
+    const uint32_t b = r >> HSTPF__QSHIFT;
+    hstpf_real_t f;
+    if (b == 0u) {
+        return hstpf__dist_tail(d->tail_lo, r);
+    }
+    if (b == HSTPF_DIST_QN - 1u) {
+        return hstpf__dist_tail(d->tail_hi, ~r);
+    }
+    f = (hstpf_real_t)(r & ((1u << HSTPF__QSHIFT) - 1u)) *
+        (hstpf_real_t)(1.0 / (double)(1u << HSTPF__QSHIFT));
+    return d->q[b] + f * (d->q[b + 1u] - d->q[b]);
+}
+
+static inline hstpf_real_t hstpf__dist_logpdf(const hstpf_dist_t *d, hstpf_real_t x)
+{
+    const hstpf_real_t t = (x - d->lo) * d->inv_dx;
+    hstpf_real_t dd, v, edge;
+    int side;
+    if (t >= (hstpf_real_t)0 && t < (hstpf_real_t)(HSTPF_DIST_LN - 1)) {
+        const int32_t j = (int32_t)t;
+        const hstpf_real_t f = t - (hstpf_real_t)j;
+        return d->lp[j] + f * (d->lp[j + 1] - d->lp[j]);
+    }
+    if (t < (hstpf_real_t)0) {
+        side = 0;
+        dd = -t * d->dx;
+        edge = d->lp[0];
+    } else if (t >= (hstpf_real_t)(HSTPF_DIST_LN - 1)) {
+        side = 1;
+        dd = (t - (hstpf_real_t)(HSTPF_DIST_LN - 1)) * d->dx;
+        edge = d->lp[HSTPF_DIST_LN - 1];
+    } else {
+        return d->floor; /* NaN */
+    }
+    if (d->hard[side] && d->tail_c[side] == (hstpf_real_t)0) {
+        return d->floor;
+    }
+    v = edge + dd * (d->tail_b[side] + d->tail_c[side] * dd);
+    return v > d->floor ? v : d->floor;
+}
+
+/* exp(x), x <= 0: 2^-(n+f) with f from the table, 2^-n built in the exponent. */
+static inline hstpf_real_t hstpf__exp_neg(hstpf_real_t x)
+{
+    hstpf_real_t t, g, v;
+    int32_t n, j;
+    if (!(x < (hstpf_real_t)0)) {
+        return x >= (hstpf_real_t)0 ? (hstpf_real_t)1 : (hstpf_real_t)0;
+    }
+    if (x < (hstpf_real_t)-100) {
+        return (hstpf_real_t)0;
+    }
+    t = -x * (hstpf_real_t)1.4426950408889634; /* log2(e) */
+    n = (int32_t)t;
+    g = (t - (hstpf_real_t)n) * (hstpf_real_t)HSTPF__EXP_N;
+    j = (int32_t)g;
+    g -= (hstpf_real_t)j;
+    v = hstpf__exp2_tab[j] + g * (hstpf__exp2_tab[j + 1] - hstpf__exp2_tab[j]);
+#if defined(HSTPF_USE_DOUBLE) && HSTPF_USE_DOUBLE
+    {
+        const uint64_t bits = (uint64_t)(1023 - n) << 52;
+        double p;
+        memcpy(&p, &bits, sizeof p);
+        return v * p;
+    }
+#else
+    if (n > 126) {
+        return 0.0f;
+    }
+    {
+        const uint32_t bits = (uint32_t)(127 - n) << 23;
+        float p;
+        memcpy(&p, &bits, sizeof p);
+        return v * p;
+    }
+#endif
+}
+
+/* Validates a specification without building it (used by hstpf_init). */
+int32_t hstpf__dist_check(const hstpf_dist_spec_t *spec);
+
+#endif

@@ -1,0 +1,638 @@
+/* The bank of particle filters and the model-weight update (paper Table 2). */
+#include <math.h>
+#include <string.h>
+
+#include "dist_impl.h"
+#include "hstpf/hstpf.h"
+#include "rng_impl.h"
+
+#define HSTPF_MAGIC 0x48535446u /* "HSTF" */
+#define G_ACC 9.81
+#define REBASE_M 1024.0 /* re-centre the float positions past this distance */
+
+typedef hstpf_real_t real;
+
+static int fin(double x)
+{
+    return isfinite(x) ? 1 : 0;
+}
+
+int32_t hstpf_config_default(hstpf_config_t *cfg)
+{
+    if (cfg == NULL) {
+        return HSTPF_E_NULL;
+    }
+    memset(cfg, 0, sizeof *cfg);
+    cfg->n_particles = 100;
+    cfg->seed = 1;
+    cfg->gamma_rot = 0.06;
+    cfg->noise_s.kind = HSTPF_DIST_GAUSSIAN;
+    cfg->noise_s.sd = sqrt(0.02);
+    cfg->noise_v.kind = HSTPF_DIST_GAUSSIAN;
+    cfg->noise_v.sd = sqrt(0.05);
+    cfg->noise_e.kind = HSTPF_DIST_GAUSSIAN;
+    cfg->noise_e.sd = sqrt(5.0);
+    cfg->dt_nominal_s = 1.0;
+    cfg->init_speed_mps = 0.0;
+    cfg->init_speed_sd = 1.0;
+    cfg->resample = HSTPF_RESAMPLE_ESS;
+    cfg->ess_threshold = 0.5;
+    cfg->roughening_k = 0.2;
+    cfg->weight_method = HSTPF_WEIGHT_MARGINAL;
+    cfg->q_floor = 1e-6;
+    cfg->declare_threshold = 0.9;
+    cfg->declare_hold_s = 30.0;
+    cfg->gate_m = 1000.0;
+    return HSTPF_OK;
+}
+
+static int32_t check_theta(const hstpf_theta_t *t)
+{
+    if (!fin(t->c0) || !fin(t->c1) || !fin(t->c2)) {
+        return HSTPF_E_NONFINITE;
+    }
+    if (t->c0 < 0.0 || t->c0 > 50.0 || t->c1 < 0.0 || t->c1 > 1.0 || t->c2 < 0.0 || t->c2 > 0.01) {
+        return HSTPF_E_RANGE;
+    }
+    return HSTPF_OK;
+}
+
+static int32_t check_config(const hstpf_config_t *c)
+{
+    const double nums[] = {c->gamma_rot, c->dt_nominal_s, c->init_speed_mps, c->init_speed_sd,
+                           c->ess_threshold, c->roughening_k, c->rough_min_s, c->rough_min_v,
+                           c->q_floor, c->declare_threshold, c->declare_hold_s, c->gate_m};
+    uint32_t i;
+    int32_t err;
+    if (c->models == NULL || (c->n_track > 0u && c->track == NULL)) {
+        return HSTPF_E_NULL;
+    }
+    if (c->n_models < 1u || c->n_models > HSTPF_MAX_MODELS || c->n_particles < 2u ||
+        c->n_particles > HSTPF_MAX_PARTICLES || c->n_track > HSTPF_MAX_TRACK_SEGMENTS) {
+        return HSTPF_E_SIZE;
+    }
+    for (i = 0; i < sizeof nums / sizeof nums[0]; ++i) {
+        if (!fin(nums[i])) {
+            return HSTPF_E_NONFINITE;
+        }
+    }
+    for (i = 0; i < c->n_models; ++i) {
+        err = check_theta(&c->models[i]);
+        if (err != HSTPF_OK) {
+            return err;
+        }
+    }
+    if (c->gamma_rot < 0.0 || c->gamma_rot > 1.0 || fabs(c->init_speed_mps) > HSTPF_SPEED_MAX ||
+        c->init_speed_sd < 0.0 || c->init_speed_sd > HSTPF_SPEED_MAX) {
+        return HSTPF_E_RANGE;
+    }
+    if ((c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
+        (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) ||
+        !(c->ess_threshold > 0.0 && c->ess_threshold <= 1.0) || c->roughening_k < 0.0 ||
+        c->roughening_k > 10.0 || c->rough_min_s < 0.0 || c->rough_min_v < 0.0 ||
+        c->q_floor < 0.0 || c->q_floor * (double)c->n_models >= 1.0 ||
+        !(c->declare_threshold > 0.5 && c->declare_threshold < 1.0) || c->declare_hold_s < 0.0 ||
+        c->gate_m < 0.0 || !(c->dt_nominal_s > 0.0 && c->dt_nominal_s <= HSTPF_DT_MAX_S)) {
+        return HSTPF_E_CONFIG;
+    }
+    for (i = 0; i < c->n_track; ++i) {
+        const hstpf_track_seg_t *t = &c->track[i];
+        if (!fin(t->start_m) || !fin(t->gradient_permille) || !fin(t->curve_radius_m)) {
+            return HSTPF_E_NONFINITE;
+        }
+        if (fabs(t->start_m) > HSTPF_POS_MAX_M || fabs(t->gradient_permille) > 100.0 ||
+            (t->curve_radius_m != 0.0 && t->curve_radius_m < 100.0) ||
+            (i > 0u && !(t->start_m > c->track[i - 1u].start_m))) {
+            return HSTPF_E_RANGE;
+        }
+    }
+    err = hstpf__dist_check(&c->noise_s);
+    if (err == HSTPF_OK) {
+        err = hstpf__dist_check(&c->noise_v);
+    }
+    if (err == HSTPF_OK) {
+        err = hstpf__dist_check(&c->noise_e);
+    }
+    return err;
+}
+
+/* Track resistance in acceleration units (m/s^2) per segment, and segment
+ * starts relative to the origin: recomputed when the origin moves. */
+static void track_rebase(hstpf_t *f)
+{
+    uint16_t j;
+    for (j = 0; j < f->cfg.n_track; ++j) {
+        f->track_rel[j] = (real)(f->track[j].start_m - f->origin_m);
+    }
+}
+
+static real track_acc(const hstpf_t *f, uint16_t *hint, real s)
+{
+    uint16_t j = *hint;
+    const uint16_t n = f->cfg.n_track;
+    while (j + 1u < n && s >= f->track_rel[j + 1u]) {
+        ++j;
+    }
+    while (j > 0u && s < f->track_rel[j]) {
+        --j;
+    }
+    *hint = j;
+    return s < f->track_rel[0] ? (real)0 : f->track_acc[j];
+}
+
+static double seg_resistance(const hstpf_track_seg_t *t)
+{
+    return t->gradient_permille + (t->curve_radius_m > 0.0 ? 600.0 / t->curve_radius_m : 0.0);
+}
+
+static void reset_state(hstpf_t *f)
+{
+    uint16_t l;
+    const double lq = -log((double)f->cfg.n_models);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        m->logq = lq;
+        m->s_mean = m->v_mean = m->loglik = 0;
+        m->ess = (real)f->cfg.n_particles;
+        m->floor_hits = 0;
+        m->track_hint = 0;
+    }
+    f->origin_m = 0.0;
+    f->time_s = 0.0;
+    f->held_s = 0.0;
+    f->decision_time_s = -1.0;
+    f->steps = 0;
+    f->leader = -1;
+    f->declared = -1;
+    f->status = HSTPF_STATUS_UNDECIDED;
+    f->have_fix = 0;
+}
+
+int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
+{
+    int32_t err;
+    uint16_t l;
+    if (f == NULL || cfg == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f_size != sizeof(hstpf_t)) {
+        return HSTPF_E_ABI;
+    }
+    err = check_config(cfg);
+    if (err != HSTPF_OK) {
+        return err;
+    }
+    memset(f, 0, sizeof *f);
+    f->cfg = *cfg;
+    f->cfg.models = NULL; /* copied below: the caller's arrays need not live on */
+    f->cfg.track = NULL;
+    f->xi = G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
+    for (l = 0; l < cfg->n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        f->theta[l] = cfg->models[l];
+        /* a = xi u - k0 - k1 v - k2 v^2 with v in m/s */
+        m->k0 = (real)(f->xi * cfg->models[l].c0);
+        m->k1 = (real)(f->xi * cfg->models[l].c1 * 3.6);
+        m->k2 = (real)(f->xi * cfg->models[l].c2 * 12.96);
+        (void)hstpf_rng_seed(&m->rng, cfg->seed, l);
+    }
+    for (l = 0; l < cfg->n_track; ++l) {
+        f->track[l] = cfg->track[l];
+        f->track_acc[l] = (real)(f->xi * seg_resistance(&cfg->track[l]));
+    }
+    {
+        hstpf_dist_spec_t unit;
+        memset(&unit, 0, sizeof unit);
+        unit.kind = HSTPF_DIST_GAUSSIAN;
+        unit.sd = 1.0;
+        /* specs were checked above, so these cannot fail */
+        (void)hstpf_dist_init(&f->ds, &cfg->noise_s);
+        (void)hstpf_dist_init(&f->dv, &cfg->noise_v);
+        (void)hstpf_dist_init(&f->de, &cfg->noise_e);
+        (void)hstpf_dist_init(&f->unit, &unit);
+    }
+    reset_state(f);
+    f->magic = HSTPF_MAGIC;
+    return HSTPF_OK;
+}
+
+int32_t hstpf_reset(hstpf_t *f)
+{
+    if (f == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    reset_state(f);
+    return HSTPF_OK;
+}
+
+/* Particles from the first fix: s = y - e_i, so that the prior is the
+ * measurement's own posterior; v from the speed prior. */
+static void first_fix(hstpf_t *f, double y)
+{
+    uint16_t l, i;
+    const uint16_t n = f->cfg.n_particles;
+    const real lw0 = (real)-log((double)n);
+    f->origin_m = floor(y);
+    track_rebase(f);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        double ss = 0.0, sv = 0.0;
+        for (i = 0; i < n; ++i) {
+            m->s[i] = (real)(y - f->origin_m) - hstpf__dist_sample(&f->de, hstpf__rng_next(&m->rng));
+            m->v[i] = (real)f->cfg.init_speed_mps +
+                      (real)f->cfg.init_speed_sd * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+            m->lw[i] = lw0;
+            ss += (double)m->s[i];
+            sv += (double)m->v[i];
+        }
+        m->s_mean = (real)(ss / n);
+        m->v_mean = (real)(sv / n);
+        m->ess = (real)n;
+    }
+    f->have_fix = 1;
+}
+
+/* Systematic resampling, in place. counts[i] = copies of particle i; the
+ * cumulative count is clamped to [previous, n] and the last is forced to n,
+ * so float round-off can never index past the end. */
+static void resample(hstpf_t *f, hstpf_model_t *m, const real *w)
+{
+    const uint16_t n = f->cfg.n_particles;
+    uint16_t *cnt = f->counts;
+    const real u0 = hstpf__rng_uniform(&m->rng);
+    real c = 0;
+    uint16_t i, prev = 0, dead = 0;
+    for (i = 0; i < n; ++i) {
+        int32_t k;
+        c += w[i];
+        if (i + 1u == n) {
+            k = n;
+        } else {
+            k = (int32_t)ceil(c * (real)n - u0);
+            if (k < (int32_t)prev) {
+                k = prev;
+            }
+            if (k > (int32_t)n) {
+                k = n;
+            }
+        }
+        cnt[i] = (uint16_t)(k - (int32_t)prev);
+        prev = (uint16_t)k;
+    }
+    /* a survivor keeps its slot; its extra copies fill the dead slots */
+    for (i = 0; i < n; ++i) {
+        uint16_t extra = cnt[i] > 0u ? (uint16_t)(cnt[i] - 1u) : 0u;
+        while (extra > 0u) {
+            while (cnt[dead] != 0u) {
+                ++dead;
+            }
+            m->s[dead] = m->s[i];
+            m->v[dead] = m->v[i];
+            ++dead; /* stays 0 so the outer loop never copies it again */
+            --extra;
+        }
+    }
+}
+
+/* Roughening (Gordon et al. 1993): jitter of sd k * spread * n^(-1/2). */
+static void roughen(hstpf_t *f, hstpf_model_t *m)
+{
+    const uint16_t n = f->cfg.n_particles;
+    real smin = m->s[0], smax = m->s[0], vmin = m->v[0], vmax = m->v[0], ks, kv;
+    const real k = (real)(f->cfg.roughening_k / sqrt((double)n));
+    uint16_t i;
+    for (i = 1; i < n; ++i) {
+        smin = m->s[i] < smin ? m->s[i] : smin;
+        smax = m->s[i] > smax ? m->s[i] : smax;
+        vmin = m->v[i] < vmin ? m->v[i] : vmin;
+        vmax = m->v[i] > vmax ? m->v[i] : vmax;
+    }
+    ks = k * (smax - smin);
+    kv = k * (vmax - vmin);
+    ks = ks > (real)f->cfg.rough_min_s ? ks : (real)f->cfg.rough_min_s;
+    kv = kv > (real)f->cfg.rough_min_v ? kv : (real)f->cfg.rough_min_v;
+    if (ks <= (real)0 && kv <= (real)0) {
+        return;
+    }
+    for (i = 0; i < n; ++i) {
+        m->s[i] += ks * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+        m->v[i] += kv * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+    }
+}
+
+/* One model: propagate, weight, estimate, resample. Returns the model's
+ * log-likelihood increment (0 without a measurement). */
+static real model_step(hstpf_t *f, hstpf_model_t *m, real dt, real xu, real scale, int has_y, real yr)
+{
+    const uint16_t n = f->cfg.n_particles;
+    real *w = f->scratch;
+    real lmax = (real)-1e30, sum = 0, sw2 = 0, ms = 0, mv = 0, inc = 0;
+    uint16_t i, at_floor = 0;
+    const int track = f->cfg.n_track > 0u;
+
+    for (i = 0; i < n; ++i) {
+        const real s = m->s[i], v = m->v[i];
+        const real ws = scale * hstpf__dist_sample(&f->ds, hstpf__rng_next(&m->rng));
+        const real wv = scale * hstpf__dist_sample(&f->dv, hstpf__rng_next(&m->rng));
+        real a = xu - m->k0 - (m->k1 + m->k2 * v) * v, vd;
+        if (track) {
+            a -= track_acc(f, &m->track_hint, s);
+        }
+        vd = v + dt * a;
+        if (v >= (real)0 && vd < (real)0) {
+            vd = 0; /* resistance and braking cannot reverse the train */
+        }
+        m->s[i] = s + dt * v + ws;
+        m->v[i] = vd + wv;
+        if (has_y) {
+            const real l = hstpf__dist_logpdf(&f->de, yr - m->s[i]);
+            at_floor = (uint16_t)(at_floor + (l <= f->de.floor));
+            m->lw[i] += l;
+            lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
+        }
+    }
+    if (!has_y) {
+        /* weights unchanged: estimate with them */
+        for (i = 0; i < n; ++i) {
+            const real wi = hstpf__exp_neg(m->lw[i]);
+            sum += wi;
+            ms += wi * m->s[i];
+            mv += wi * m->v[i];
+        }
+        m->s_mean = ms / sum;
+        m->v_mean = mv / sum;
+        m->loglik = 0;
+        return 0;
+    }
+    if (at_floor == n) {
+        ++m->floor_hits;
+    }
+    for (i = 0; i < n; ++i) {
+        w[i] = hstpf__exp_neg(m->lw[i] - lmax);
+        sum += w[i];
+    }
+    /* sum >= 1: the best particle contributes exp(0) */
+    {
+        const real lsum = (real)log((double)sum);
+        const real inv = (real)1 / sum;
+        for (i = 0; i < n; ++i) {
+            m->lw[i] -= lmax + lsum; /* normalised again */
+        }
+        inc = lmax + lsum;
+        for (i = 0; i < n; ++i) {
+            w[i] *= inv;
+            sw2 += w[i] * w[i];
+            ms += w[i] * m->s[i];
+            mv += w[i] * m->v[i];
+        }
+    }
+    m->s_mean = ms;
+    m->v_mean = mv;
+    m->ess = (real)1 / sw2;
+    if (f->cfg.weight_method == HSTPF_WEIGHT_PAPER) {
+        inc = hstpf__dist_logpdf(&f->de, yr - ms);
+    }
+    if (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < (real)f->cfg.ess_threshold * (real)n) {
+        const real lw0 = (real)-log((double)n);
+        resample(f, m, w);
+        for (i = 0; i < n; ++i) {
+            m->lw[i] = lw0;
+        }
+        if (f->cfg.roughening_k > 0.0 || f->cfg.rough_min_s > 0.0 || f->cfg.rough_min_v > 0.0) {
+            roughen(f, m);
+        }
+    }
+    m->loglik = inc;
+    return inc;
+}
+
+static void update_model_weights(hstpf_t *f)
+{
+    const uint16_t nm = f->cfg.n_models;
+    const double lfloor = f->cfg.q_floor > 0.0 ? log(f->cfg.q_floor) : -HUGE_VAL;
+    double mx = -HUGE_VAL, sum = 0.0, lsum;
+    uint16_t l;
+    int pass;
+    for (l = 0; l < nm; ++l) {
+        f->m[l].logq += (double)f->m[l].loglik;
+    }
+    /* Eq. 14 by log-sum-exp; then the floor, and normalise again */
+    for (pass = 0; pass < 2; ++pass) {
+        mx = -HUGE_VAL;
+        sum = 0.0;
+        for (l = 0; l < nm; ++l) {
+            mx = f->m[l].logq > mx ? f->m[l].logq : mx;
+        }
+        for (l = 0; l < nm; ++l) {
+            sum += exp(f->m[l].logq - mx);
+        }
+        lsum = mx + log(sum);
+        for (l = 0; l < nm; ++l) {
+            f->m[l].logq -= lsum;
+            if (pass == 0 && f->m[l].logq < lfloor) {
+                f->m[l].logq = lfloor;
+            }
+        }
+    }
+}
+
+static void update_declaration(hstpf_t *f, double dt)
+{
+    int16_t best = 0;
+    uint16_t l;
+    for (l = 1; l < f->cfg.n_models; ++l) {
+        if (f->m[l].logq > f->m[best].logq) {
+            best = (int16_t)l;
+        }
+    }
+    if (exp(f->m[best].logq) > f->cfg.declare_threshold) {
+        if (best == f->leader) {
+            f->held_s += dt;
+        } else {
+            f->leader = best;
+            f->held_s = 0.0;
+        }
+    } else {
+        f->leader = -1;
+        f->held_s = 0.0;
+    }
+    if (f->leader >= 0 && f->held_s >= f->cfg.declare_hold_s && f->leader != f->declared) {
+        f->status = f->declared < 0 ? HSTPF_STATUS_DECLARED : HSTPF_STATUS_CHANGED;
+        f->declared = f->leader;
+        f->decision_time_s = f->time_s;
+    }
+}
+
+static double blended_position(const hstpf_t *f, double dt_ahead)
+{
+    double s = 0.0;
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        s += exp(m->logq) * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
+    }
+    return s;
+}
+
+/* Keep float positions small: shift the origin by whole metres. */
+static void rebase(hstpf_t *f)
+{
+    const double rel = blended_position(f, 0.0);
+    real d;
+    uint16_t l, i;
+    if (fabs(rel) < REBASE_M) {
+        return;
+    }
+    d = (real)floor(rel);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        for (i = 0; i < f->cfg.n_particles; ++i) {
+            m->s[i] -= d;
+        }
+        m->s_mean -= d;
+    }
+    f->origin_m += (double)d;
+    track_rebase(f);
+}
+
+int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
+{
+    const int has_y = (in != NULL && in->has_position) ? 1 : 0;
+    real scale, yr = 0;
+    uint16_t l;
+    if (f == NULL || in == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    if (!fin(in->dt_s) || !fin(in->traction) || (has_y && !fin(in->position_m))) {
+        return HSTPF_E_NONFINITE;
+    }
+    if (!(in->dt_s > 0.0 && in->dt_s <= HSTPF_DT_MAX_S)) {
+        return HSTPF_E_DT;
+    }
+    if (fabs(in->traction) > HSTPF_U_MAX || (has_y && fabs(in->position_m) > HSTPF_POS_MAX_M)) {
+        return HSTPF_E_RANGE;
+    }
+    if (!f->have_fix) {
+        if (has_y) {
+            first_fix(f, in->position_m);
+            update_declaration(f, in->dt_s);
+        }
+        f->time_s += in->dt_s;
+        ++f->steps;
+        return HSTPF_OK;
+    }
+    if (has_y && f->cfg.gate_m > 0.0 &&
+        fabs(in->position_m - f->origin_m - blended_position(f, in->dt_s)) > f->cfg.gate_m) {
+        return HSTPF_E_OUTLIER;
+    }
+    /* all checks passed: from here on the step cannot fail */
+    scale = (real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
+    if (has_y) {
+        yr = (real)(in->position_m - f->origin_m);
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        (void)model_step(f, &f->m[l], (real)in->dt_s, (real)(f->xi * in->traction), scale, has_y, yr);
+    }
+    if (has_y) {
+        update_model_weights(f);
+    }
+    f->time_s += in->dt_s;
+    ++f->steps;
+    update_declaration(f, in->dt_s);
+    rebase(f);
+    return HSTPF_OK;
+}
+
+int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
+{
+    uint16_t l;
+    double v = 0.0, th[3] = {0.0, 0.0, 0.0};
+    int16_t best = 0;
+    if (f == NULL || out == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    memset(out, 0, sizeof *out);
+    out->step = f->steps;
+    out->time_s = f->time_s;
+    out->n_models = f->cfg.n_models;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const double q = exp(m->logq);
+        hstpf_model_out_t *o = &out->model[l];
+        o->q = (real)q;
+        o->position_m = f->origin_m + (double)m->s_mean;
+        o->speed_mps = m->v_mean;
+        o->ess = m->ess;
+        o->loglik = m->loglik;
+        o->floor_hits = m->floor_hits;
+        v += q * (double)m->v_mean;
+        th[0] += q * f->theta[l].c0;
+        th[1] += q * f->theta[l].c1;
+        th[2] += q * f->theta[l].c2;
+        if (m->logq > f->m[best].logq) {
+            best = (int16_t)l;
+        }
+    }
+    out->position_m = f->have_fix ? f->origin_m + blended_position(f, 0.0) : 0.0;
+    out->speed_mps = (real)v;
+    out->theta[0] = (real)th[0];
+    out->theta[1] = (real)th[1];
+    out->theta[2] = (real)th[2];
+    {
+        const hstpf_theta_t t = {NULL, th[0], th[1], th[2]};
+        out->resistance = (real)hstpf_resistance(&t, v);
+    }
+    out->best = best;
+    out->declared = f->declared;
+    out->status = f->status;
+    out->decision_time_s = f->decision_time_s;
+    return HSTPF_OK;
+}
+
+int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s, hstpf_real_t *v, hstpf_real_t *w)
+{
+    uint16_t i;
+    if (f == NULL || s == NULL || v == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    if (model >= f->cfg.n_models) {
+        return HSTPF_E_SIZE;
+    }
+    for (i = 0; i < f->cfg.n_particles; ++i) {
+        s[i] = f->origin_m + (double)f->m[model].s[i];
+        v[i] = f->m[model].v[i];
+        if (w != NULL) {
+            w[i] = hstpf__exp_neg(f->m[model].lw[i]);
+        }
+    }
+    return HSTPF_OK;
+}
+
+int32_t hstpf_track_resistance(const hstpf_t *f, double pos_m, double *g_out)
+{
+    uint16_t j;
+    double g = 0.0;
+    if (f == NULL || g_out == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    for (j = 0; j < f->cfg.n_track && pos_m >= f->track[j].start_m; ++j) {
+        g = seg_resistance(&f->track[j]);
+    }
+    *g_out = g;
+    return HSTPF_OK;
+}

@@ -1,0 +1,189 @@
+#include "hstpf_sim.h"
+
+#include <math.h>
+#include <string.h>
+
+#define SIM_STREAM 0x5151u /* far from the filter's streams 0..16 */
+
+static double u01(hstpf_rng_t *r) /* (0, 1), 53 bits */
+{
+    const uint64_t hi = hstpf_rng_next(r) >> 5, lo = hstpf_rng_next(r) >> 6;
+    return ((double)(hi * 67108864u + lo) + 0.5) / 9007199254740992.0;
+}
+
+double hstpf_sim_gauss(hstpf_rng_t *r)
+{
+    return sqrt(-2.0 * log(u01(r))) * cos(6.283185307179586 * u01(r));
+}
+
+/* Marsaglia and Tsang (2000); shape < 1 via Gamma(k+1) * U^(1/k). */
+double hstpf_sim_gamma(hstpf_rng_t *r, double k)
+{
+    double boost = 1.0, d, c;
+    if (k < 1.0) {
+        boost = exp(log(u01(r)) / k);
+        k += 1.0;
+    }
+    d = k - 1.0 / 3.0;
+    c = 1.0 / sqrt(9.0 * d);
+    for (;;) {
+        double x, v, u;
+        do {
+            x = hstpf_sim_gauss(r);
+            v = 1.0 + c * x;
+        } while (v <= 0.0);
+        v = v * v * v;
+        u = u01(r);
+        if (log(u) < 0.5 * x * x + d - d * v + d * log(v)) {
+            return d * v * boost;
+        }
+    }
+}
+
+double hstpf_sim_noise(hstpf_rng_t *r, const hstpf_dist_spec_t *d)
+{
+    if (d->kind == HSTPF_DIST_GAMMA) {
+        return d->loc + d->scale * hstpf_sim_gamma(r, d->shape);
+    }
+    return d->mean + d->sd * hstpf_sim_gauss(r);
+}
+
+static void gauss(hstpf_dist_spec_t *d, double var)
+{
+    memset(d, 0, sizeof *d);
+    d->kind = HSTPF_DIST_GAUSSIAN;
+    d->sd = sqrt(var);
+}
+
+static void gam(hstpf_dist_spec_t *d, double shape, double scale)
+{
+    memset(d, 0, sizeof *d);
+    d->kind = HSTPF_DIST_GAMMA;
+    d->shape = shape;
+    d->scale = scale;
+}
+
+void hstpf_sim_case1(hstpf_sim_config_t *c)
+{
+    gauss(&c->noise_s, 0.02);
+    gauss(&c->noise_v, 0.05);
+    gauss(&c->noise_e, 5.0);
+}
+
+void hstpf_sim_case2(hstpf_sim_config_t *c)
+{
+    gam(&c->noise_s, 0.02, 0.1);
+    gam(&c->noise_v, 0.1, 0.05);
+    gam(&c->noise_e, 0.5, 0.2);
+}
+
+void hstpf_sim_default(hstpf_sim_config_t *c)
+{
+    memset(c, 0, sizeof *c);
+    c->truth = hstpf_train_types[2]; /* CRH3 */
+    c->gamma_rot = 0.06;
+    hstpf_sim_case1(c);
+    c->profile = HSTPF_PROFILE_PAPER;
+    c->dt_s = 1.0;
+    c->seed = 1;
+}
+
+void hstpf_sim_init(hstpf_sim_t *sim, const hstpf_sim_config_t *c)
+{
+    memset(sim, 0, sizeof *sim);
+    sim->cfg = *c;
+    sim->xi = 9.81 / (1.0 + c->gamma_rot) / 1000.0;
+    (void)hstpf_rng_seed(&sim->rng, c->seed, SIM_STREAM);
+}
+
+#define KMH(x) ((x) / 3.6)
+#define A_PAPER (KMH(350.0) / 396.0) /* 0 -> 350 km/h in 396 s */
+#define KP 0.5                       /* speed-holding gain, 1/s */
+
+static double track_to(double target, double v, double amax, double bmax)
+{
+    double a = KP * (target - v);
+    return a > amax ? amax : (a < -bmax ? -bmax : a);
+}
+
+double hstpf_sim_accel_cmd(hstpf_profile_t p, double t, double v, int *coast)
+{
+    *coast = 0;
+    switch (p) {
+    case HSTPF_PROFILE_COAST_BRAKE:
+        if (t < 600.0) {
+            return track_to(KMH(300.0), v, 0.3, 0.5);
+        }
+        if (t < 900.0) {
+            *coast = 1;
+            return 0.0;
+        }
+        if (t < 1100.0) {
+            return track_to(KMH(150.0), v, 0.3, 0.5);
+        }
+        if (t < 1500.0) {
+            return track_to(KMH(350.0), v, 0.3, 0.5);
+        }
+        if (t < 1650.0) {
+            *coast = 1;
+            return 0.0;
+        }
+        return track_to(KMH(200.0), v, 0.3, 0.5);
+    case HSTPF_PROFILE_STOPS: {
+        /* 600 s cycle: run at 250 km/h, brake to a stop, dwell 60 s */
+        const double tc = fmod(t, 600.0);
+        if (tc < 420.0) {
+            return track_to(KMH(250.0), v, 0.3, 0.5);
+        }
+        if (tc < 540.0) {
+            return v > 0.0 ? track_to(0.0, v, 0.3, 0.6) : 0.0;
+        }
+        return v > 0.0 ? -0.3 : 0.0;
+    }
+    default:
+        return track_to(KMH(350.0), v, A_PAPER, 0.5);
+    }
+}
+
+double hstpf_sim_track(const hstpf_sim_config_t *c, double s)
+{
+    double g = 0.0;
+    uint16_t j;
+    for (j = 0; j < c->n_track && s >= c->track[j].start_m; ++j) {
+        g = c->track[j].gradient_permille +
+            (c->track[j].curve_radius_m > 0.0 ? 600.0 / c->track[j].curve_radius_m : 0.0);
+    }
+    return g;
+}
+
+void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *o)
+{
+    const hstpf_sim_config_t *c = &sim->cfg;
+    const double w = hstpf_resistance(&c->truth, sim->v);
+    const double g = hstpf_sim_track(c, sim->s);
+    int coast;
+    const double acmd = hstpf_sim_accel_cmd(c->profile, sim->t, sim->v, &coast);
+    double a, vd;
+    /* traction that gives the commanded acceleration at the true state */
+    o->u = coast ? 0.0 : acmd / sim->xi + w + g;
+    if (o->u > HSTPF_U_MAX) {
+        o->u = HSTPF_U_MAX;
+    } else if (o->u < -HSTPF_U_MAX) {
+        o->u = -HSTPF_U_MAX;
+    }
+    o->t = sim->t;
+    o->s = sim->s;
+    o->v = sim->v;
+    o->y = sim->s + hstpf_sim_noise(&sim->rng, &c->noise_e);
+    o->has_y = !(c->loss_rate > 0.0 && u01(&sim->rng) < c->loss_rate);
+    /* the model of the filter, with the true coefficients */
+    a = sim->xi * (o->u - w - g);
+    vd = sim->v + c->dt_s * a;
+    if (sim->v >= 0.0 && vd < 0.0) {
+        vd = 0.0;
+    }
+    sim->s += c->dt_s * sim->v + hstpf_sim_noise(&sim->rng, &c->noise_s);
+    sim->v = vd + hstpf_sim_noise(&sim->rng, &c->noise_v);
+    sim->t += c->dt_s;
+    ++sim->k;
+}
