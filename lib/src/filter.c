@@ -4,6 +4,7 @@
 
 #include "dist_impl.h"
 #include "hstpf/hstpf.h"
+#include "internal.h"
 #include "rng_impl.h"
 
 #define HSTPF_MAGIC 0x48535446u /* "HSTF" */
@@ -255,16 +256,12 @@ static void first_fix(hstpf_t *f, double y)
     f->have_fix = 1;
 }
 
-/* Systematic resampling, in place. counts[i] = copies of particle i; the
- * cumulative count is clamped to [previous, n] and the last is forced to n,
- * so float round-off can never index past the end. */
-static void resample(hstpf_t *f, hstpf_model_t *m, const real *w)
+/* The cumulative count is clamped to [previous, n] and the last is forced to
+ * n, so float round-off can never index past the end. */
+void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
 {
-    const uint16_t n = f->cfg.n_particles;
-    uint16_t *cnt = f->counts;
-    const real u0 = hstpf__rng_uniform(&m->rng);
     real c = 0;
-    uint16_t i, prev = 0, dead = 0;
+    uint16_t i, prev = 0;
     for (i = 0; i < n; ++i) {
         int32_t k;
         c += w[i];
@@ -282,16 +279,20 @@ static void resample(hstpf_t *f, hstpf_model_t *m, const real *w)
         cnt[i] = (uint16_t)(k - (int32_t)prev);
         prev = (uint16_t)k;
     }
-    /* a survivor keeps its slot; its extra copies fill the dead slots */
+}
+
+void hstpf__replicate(real *s, real *v, uint16_t *cnt, uint16_t n)
+{
+    uint16_t i, dead = 0;
     for (i = 0; i < n; ++i) {
         uint16_t extra = cnt[i] > 0u ? (uint16_t)(cnt[i] - 1u) : 0u;
         while (extra > 0u) {
             while (cnt[dead] != 0u) {
                 ++dead;
             }
-            m->s[dead] = m->s[i];
-            m->v[dead] = m->v[i];
-            ++dead; /* stays 0 so the outer loop never copies it again */
+            s[dead] = s[i];
+            v[dead] = v[i];
+            ++dead; /* its count stays 0: the outer loop never copies it */
             --extra;
         }
     }
@@ -397,7 +398,8 @@ static real model_step(hstpf_t *f, hstpf_model_t *m, real dt, real xu, real scal
     }
     if (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < (real)f->cfg.ess_threshold * (real)n) {
         const real lw0 = (real)-log((double)n);
-        resample(f, m, w);
+        hstpf__resample_counts(w, n, hstpf__rng_uniform(&m->rng), f->counts);
+        hstpf__replicate(m->s, m->v, f->counts, n);
         for (i = 0; i < n; ++i) {
             m->lw[i] = lw0;
         }
