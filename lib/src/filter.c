@@ -26,6 +26,8 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     memset(cfg, 0, sizeof *cfg);
     cfg->n_particles = 100;
     cfg->seed = 1;
+    cfg->common_random = 0;
+    cfg->antithetic = 0;
     cfg->gamma_rot = 0.06;
     cfg->noise_s.kind = HSTPF_DIST_GAUSSIAN;
     cfg->noise_s.sd = sqrt(0.02);
@@ -87,7 +89,7 @@ static int32_t check_config(const hstpf_config_t *c)
         c->init_speed_sd < 0.0 || c->init_speed_sd > HSTPF_SPEED_MAX) {
         return HSTPF_E_RANGE;
     }
-    if ((c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
+    if (c->common_random > 1u || c->antithetic > 1u || (c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
         (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) ||
         !(c->ess_threshold > 0.0 && c->ess_threshold <= 1.0) || c->roughening_k < 0.0 ||
         c->roughening_k > 10.0 || c->rough_min_s < 0.0 || c->rough_min_v < 0.0 ||
@@ -195,7 +197,7 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
         m->k0 = (real)(f->xi * cfg->models[l].c0);
         m->k1 = (real)(f->xi * cfg->models[l].c1 * 3.6);
         m->k2 = (real)(f->xi * cfg->models[l].c2 * 12.96);
-        (void)hstpf_rng_seed(&m->rng, cfg->seed, l);
+        (void)hstpf_rng_seed(&m->rng, cfg->seed, cfg->common_random ? 0u : l);
     }
     for (l = 0; l < cfg->n_track; ++l) {
         f->track[l] = cfg->track[l];
@@ -334,10 +336,20 @@ static real model_step(hstpf_t *f, hstpf_model_t *m, real dt, real xu, real scal
     uint16_t i, at_floor = 0;
     const int track = f->cfg.n_track > 0u;
 
+    uint32_t rs = 0, rv = 0;
     for (i = 0; i < n; ++i) {
         const real s = m->s[i], v = m->v[i];
-        const real ws = scale * hstpf__dist_sample(&f->ds, hstpf__rng_next(&m->rng));
-        const real wv = scale * hstpf__dist_sample(&f->dv, hstpf__rng_next(&m->rng));
+        real ws, wv;
+        /* antithetic pairs: odd particles take u' = 1 - u of the even ones */
+        if ((i & 1u) == 0u || !f->cfg.antithetic) {
+            rs = hstpf__rng_next(&m->rng);
+            rv = hstpf__rng_next(&m->rng);
+        } else {
+            rs = ~rs;
+            rv = ~rv;
+        }
+        ws = scale * hstpf__dist_sample(&f->ds, rs);
+        wv = scale * hstpf__dist_sample(&f->dv, rv);
         real a = xu - m->k0 - (m->k1 + m->k2 * v) * v, vd;
         if (track) {
             a -= track_acc(f, &m->track_hint, s);

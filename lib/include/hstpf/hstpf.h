@@ -91,7 +91,17 @@ typedef struct {
     const hstpf_theta_t *models; /**< n_models rows, read during init only */
     uint16_t n_models;           /**< 1..HSTPF_MAX_MODELS */
     uint16_t n_particles;        /**< 2..HSTPF_MAX_PARTICLES (default 100) */
-    uint64_t seed;               /**< RNG seed; model l uses stream l */
+    uint64_t seed;               /**< RNG seed */
+    /** 1: every model's generator starts from the same stream (common
+     *  random numbers: the particle-noise of the likelihood estimates is
+     *  shared and cancels in the model comparison); 0: model l uses
+     *  stream l. Either way each model owns its generator, so results do not
+     *  depend on loop order (0: measured no gain, docs/results.md). */
+    uint8_t common_random;
+    /** 1: process noise drawn in antithetic pairs (u, 1 - u through the
+     *  inverse CDF), which cancels the noise's share of the error in the
+     *  cloud's mean for any distribution (0: measured no gain). */
+    uint8_t antithetic;
     double gamma_rot;            /**< rotating-mass factor, [0, 1] (0.06) */
     hstpf_dist_spec_t noise_s;   /**< w_s, m per step (N(0, sqrt 0.02)) */
     hstpf_dist_spec_t noise_v;   /**< w_v, m/s per step (N(0, sqrt 0.05)) */
