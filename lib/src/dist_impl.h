@@ -76,11 +76,16 @@ static inline hstpf_real_t hstpf__dist_logpdf(const hstpf_dist_t *d, hstpf_real_
     } else {
         return d->floor; /* NaN */
     }
-    if (d->hard[side] && d->tail_c[side] == (hstpf_real_t)0) {
-        return d->floor;
+    {
+        /* beyond the grid the floor slopes: finite, yet never flat, so a
+         * cloud that lost the measurement is still pulled back to it */
+        const hstpf_real_t fl = d->floor - dd * d->floor_slope;
+        if (d->hard[side] && d->tail_c[side] == (hstpf_real_t)0) {
+            return fl;
+        }
+        v = edge + dd * (d->tail_b[side] + d->tail_c[side] * dd);
+        return v > fl ? v : fl;
     }
-    v = edge + dd * (d->tail_b[side] + d->tail_c[side] * dd);
-    return v > d->floor ? v : d->floor;
 }
 
 /* exp(x), x <= 0: 2^-(n+f) with f from the table, 2^-n built in the exponent. */

@@ -46,6 +46,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->declare_threshold = 0.9;
     cfg->declare_hold_s = 30.0;
     cfg->gate_m = 1000.0;
+    cfg->reacquire_after = 5;
     return HSTPF_OK;
 }
 
@@ -169,6 +170,7 @@ static void reset_state(hstpf_t *f)
     f->declared = -1;
     f->status = HSTPF_STATUS_UNDECIDED;
     f->have_fix = 0;
+    f->outlier_run = 0;
 }
 
 int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
@@ -543,7 +545,21 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     }
     if (has_y && f->cfg.gate_m > 0.0 &&
         fabs(in->position_m - f->origin_m - blended_position(f, in->dt_s)) > f->cfg.gate_m) {
-        return HSTPF_E_OUTLIER;
+        if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
+            ++f->outliers;
+            ++f->outlier_run;
+            return HSTPF_E_OUTLIER;
+        }
+        /* the reference really moved: start the particles again there */
+        f->outlier_run = 0;
+        ++f->reacquired;
+        first_fix(f, in->position_m);
+        f->time_s += in->dt_s;
+        ++f->steps;
+        return HSTPF_OK;
+    }
+    if (has_y) {
+        f->outlier_run = 0;
     }
     /* all checks passed: from here on the step cannot fail */
     scale = (real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
@@ -609,6 +625,8 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->declared = f->declared;
     out->status = f->status;
     out->decision_time_s = f->decision_time_s;
+    out->outliers = f->outliers;
+    out->reacquired = f->reacquired;
     return HSTPF_OK;
 }
 

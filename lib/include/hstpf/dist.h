@@ -27,8 +27,11 @@
  * continues with its exact quadratic, the Gamma's right tail linearly with
  * its end slope; left of a hard support edge (the Gamma's location, a
  * table's ends) the value falls as a Gaussian of width edge_soft from the
- * edge value, or jumps straight to the floor when edge_soft is 0. Nothing
- * ever returns less than the floor, lp_max - floor_depth: never -inf or NaN.
+ * edge value, or jumps straight to the floor when edge_soft is 0. The floor
+ * is lp_max - floor_depth at the grid's edges and falls by 1 nat per
+ * standard deviation of the distribution beyond them: never -inf or NaN,
+ * and never flat, so particles far from a measurement are still ranked by
+ * their distance. Inside the grid nothing is below lp_max - floor_depth.
  */
 #ifndef HSTPF_DIST_H
 #define HSTPF_DIST_H
@@ -80,6 +83,7 @@ typedef struct {
     hstpf_real_t lo, dx, inv_dx;            /* grid start, spacing, 1 / spacing */
     hstpf_real_t tail_b[2], tail_c[2];      /* tails: left [0], right [1] */
     hstpf_real_t floor;                     /* absolute log-density floor */
+    hstpf_real_t floor_slope;               /* floor's fall beyond the grid, 1/sd */
     hstpf_real_t lp_max;                    /* maximum of lp[] */
     hstpf_real_t mean;                      /* exact mean */
     hstpf_real_t sd;                        /* exact standard deviation */
@@ -109,8 +113,8 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *spec);
 hstpf_real_t hstpf_dist_sample(const hstpf_dist_t *d, uint32_t r);
 
 /**
- * @brief Log-density at x, in nats, never below d->floor, never NaN for
- * finite x (NaN x returns the floor). Cost O(1); no memory.
+ * @brief Log-density at x, in nats: finite for every finite x, never NaN
+ * (NaN x returns the floor); the sloping floor as above. Cost O(1).
  */
 hstpf_real_t hstpf_dist_logpdf(const hstpf_dist_t *d, hstpf_real_t x);
 

@@ -127,6 +127,11 @@ typedef struct {
     /** Measurements farther than this from the predicted position are
      *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
     double gate_m;
+    /** After this many consecutive gated measurements the next one is
+     *  taken as a new first fix (particles redrawn there, model weights
+     *  kept): a real jump of the position reference is re-acquired. 0 =
+     *  never (5). */
+    uint16_t reacquire_after;
     const hstpf_track_seg_t *track; /**< optional profile, copied at init */
     uint16_t n_track;            /**< 0..HSTPF_MAX_TRACK_SEGMENTS */
 } hstpf_config_t;
@@ -168,6 +173,8 @@ typedef struct {
     int16_t declared;       /**< declared model index, -1 if none */
     hstpf_status_t status;  /**< declaration status */
     double decision_time_s; /**< time of the latest declaration, -1 if none */
+    uint32_t outliers;      /**< measurements rejected by the gate */
+    uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
     uint16_t n_models;
     hstpf_model_out_t model[HSTPF_MAX_MODELS];
 } hstpf_estimate_t;
@@ -210,6 +217,8 @@ typedef struct {
     uint32_t steps;
     int16_t leader, declared;
     hstpf_status_t status;
+    uint32_t outliers, reacquired;
+    uint16_t outlier_run;            /* consecutive gated measurements */
     uint8_t have_fix;
 } hstpf_t;
 
