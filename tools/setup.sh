@@ -28,7 +28,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 stamp="$venv/.hstpf-setup"
-want=$(cat "$root/tools/pyproject.toml" 2>/dev/null | sha1sum | cut -c1-12)
+want=$({ cat "$root/tools/pyproject.toml" 2>/dev/null || true; } | sha1sum | cut -c1-12)
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
   echo "setup: installing Python packages into $venv"
   "$venv/bin/pip" install -q --upgrade pip
