@@ -1,0 +1,13 @@
+/* Size probe: compiled for the target with given capacity macros, never
+ * linked. The symbol sizes (arm-none-eabi-nm -S) are the type sizes. */
+#include "hstpf/hstpf.h"
+
+extern char hstpf_sizeof_instance[sizeof(hstpf_t)];
+extern char hstpf_sizeof_estimate[sizeof(hstpf_estimate_t)];
+extern char hstpf_sizeof_model[sizeof(hstpf_model_t)];
+extern char hstpf_sizeof_dist[sizeof(hstpf_dist_t)];
+
+char hstpf_sizeof_instance[sizeof(hstpf_t)];
+char hstpf_sizeof_estimate[sizeof(hstpf_estimate_t)];
+char hstpf_sizeof_model[sizeof(hstpf_model_t)];
+char hstpf_sizeof_dist[sizeof(hstpf_dist_t)];
