@@ -9,8 +9,11 @@
 #define HSTPF__QSHIFT (32 - HSTPF_DIST_QBITS)
 #define HSTPF__EXP_N 512
 
+#define HSTPF__LOG_N 256
 /* 2^(-j/512), j = 0..512 */
 extern const hstpf_real_t hstpf__exp2_tab[HSTPF__EXP_N + 1];
+/* log2(1 + j/256), j = 0..256 */
+extern const hstpf_real_t hstpf__log2_tab[HSTPF__LOG_N + 1];
 
 static inline int hstpf__log2u(uint32_t m) /* m > 0 */
 {
@@ -123,6 +126,39 @@ static inline hstpf_real_t hstpf__exp_neg(hstpf_real_t x)
         return v * p;
     }
 #endif
+}
+
+/* log(x) for x > 0 (normal numbers): exponent from the bits, log2 of the
+ * mantissa from the table; absolute error below 2e-6. x <= 0 gives -1e30. */
+static inline hstpf_real_t hstpf__log_pos(hstpf_real_t x)
+{
+    hstpf_real_t m, t;
+    int32_t e, j;
+    if (!(x > (hstpf_real_t)0)) {
+        return (hstpf_real_t)-1e30;
+    }
+#if defined(HSTPF_USE_DOUBLE) && HSTPF_USE_DOUBLE
+    {
+        uint64_t b;
+        memcpy(&b, &x, sizeof b);
+        e = (int32_t)((b >> 52) & 0x7FFu) - 1023;
+        b = (b & 0x000FFFFFFFFFFFFFull) | 0x3FF0000000000000ull;
+        memcpy(&m, &b, sizeof m);
+    }
+#else
+    {
+        uint32_t b;
+        memcpy(&b, &x, sizeof b);
+        e = (int32_t)((b >> 23) & 0xFFu) - 127;
+        b = (b & 0x007FFFFFu) | 0x3F800000u;
+        memcpy(&m, &b, sizeof m);
+    }
+#endif
+    t = (m - (hstpf_real_t)1) * (hstpf_real_t)HSTPF__LOG_N; /* [0, 256) */
+    j = (int32_t)t;
+    t -= (hstpf_real_t)j;
+    return ((hstpf_real_t)e + hstpf__log2_tab[j] + t * (hstpf__log2_tab[j + 1] - hstpf__log2_tab[j])) *
+           (hstpf_real_t)0.69314718055994531;
 }
 
 /* Validates a specification without building it (used by hstpf_init). */

@@ -26,8 +26,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     memset(cfg, 0, sizeof *cfg);
     cfg->n_particles = 100;
     cfg->seed = 1;
-    cfg->common_random = 0;
-    cfg->antithetic = 0;
+    cfg->bank = HSTPF_BANK_INDEPENDENT;
     cfg->gamma_rot = 0.06;
     cfg->noise_s.kind = HSTPF_DIST_GAUSSIAN;
     cfg->noise_s.sd = sqrt(0.02);
@@ -90,7 +89,7 @@ static int32_t check_config(const hstpf_config_t *c)
         c->init_speed_sd < 0.0 || c->init_speed_sd > HSTPF_SPEED_MAX) {
         return HSTPF_E_RANGE;
     }
-    if (c->common_random > 1u || c->antithetic > 1u || (c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
+    if ((c->bank != HSTPF_BANK_INDEPENDENT && c->bank != HSTPF_BANK_PAIRED) || (c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
         (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) ||
         !(c->ess_threshold > 0.0 && c->ess_threshold <= 1.0) || c->roughening_k < 0.0 ||
         c->roughening_k > 10.0 || c->rough_min_s < 0.0 || c->rough_min_v < 0.0 ||
@@ -199,8 +198,9 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
         m->k0 = (real)(f->xi * cfg->models[l].c0);
         m->k1 = (real)(f->xi * cfg->models[l].c1 * 3.6);
         m->k2 = (real)(f->xi * cfg->models[l].c2 * 12.96);
-        (void)hstpf_rng_seed(&m->rng, cfg->seed, cfg->common_random ? 0u : l);
+        (void)hstpf_rng_seed(&m->rng, cfg->seed, l);
     }
+    (void)hstpf_rng_seed(&f->rng, cfg->seed, HSTPF_MAX_MODELS);
     for (l = 0; l < cfg->n_track; ++l) {
         f->track[l] = cfg->track[l];
         f->track_acc[l] = (real)(f->xi * seg_resistance(&cfg->track[l]));
@@ -234,21 +234,29 @@ int32_t hstpf_reset(hstpf_t *f)
 }
 
 /* Particles from the first fix: s = y - e_i, so that the prior is the
- * measurement's own posterior; v from the speed prior. */
+ * measurement's own posterior; v from the speed prior. The paired bank
+ * gives every model the same particles. */
 static void first_fix(hstpf_t *f, double y)
 {
     uint16_t l, i;
     const uint16_t n = f->cfg.n_particles;
     const real lw0 = (real)-log((double)n);
+    const int paired = f->cfg.bank == HSTPF_BANK_PAIRED;
     f->origin_m = floor(y);
     track_rebase(f);
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
+        hstpf_rng_t *rng = paired ? &f->rng : &m->rng;
         double ss = 0.0, sv = 0.0;
+        if (!paired || l == 0u) {
+            for (i = 0; i < n; ++i) {
+                f->nz_s[i] = hstpf__dist_sample(&f->de, hstpf__rng_next(rng));
+                f->nz_v[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+            }
+        }
         for (i = 0; i < n; ++i) {
-            m->s[i] = (real)(y - f->origin_m) - hstpf__dist_sample(&f->de, hstpf__rng_next(&m->rng));
-            m->v[i] = (real)f->cfg.init_speed_mps +
-                      (real)f->cfg.init_speed_sd * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+            m->s[i] = (real)(y - f->origin_m) - f->nz_s[i];
+            m->v[i] = (real)f->cfg.init_speed_mps + (real)f->cfg.init_speed_sd * f->nz_v[i];
             m->lw[i] = lw0;
             ss += (double)m->s[i];
             sv += (double)m->v[i];
@@ -285,7 +293,7 @@ void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
     }
 }
 
-void hstpf__replicate(real *s, real *v, uint16_t *cnt, uint16_t n)
+void hstpf__replicate(real *s, real *v, real *lw, const uint16_t *cnt, uint16_t n)
 {
     uint16_t i, dead = 0;
     for (i = 0; i < n; ++i) {
@@ -296,13 +304,42 @@ void hstpf__replicate(real *s, real *v, uint16_t *cnt, uint16_t n)
             }
             s[dead] = s[i];
             v[dead] = v[i];
-            ++dead; /* its count stays 0: the outer loop never copies it */
+            if (lw != NULL) {
+                lw[dead] = lw[i];
+            }
+            ++dead; /* a filled slot keeps count 0: never copied again */
             --extra;
         }
     }
 }
 
-/* Roughening (Gordon et al. 1993): jitter of sd k * spread * n^(-1/2). */
+/* This step's process noise into nz_s / nz_v, scaled to the step. */
+static void draw_noise(hstpf_t *f, hstpf_rng_t *rng, real scale)
+{
+    uint16_t i;
+    for (i = 0; i < f->cfg.n_particles; ++i) {
+        f->nz_s[i] = scale * hstpf__dist_sample(&f->ds, hstpf__rng_next(rng));
+        f->nz_v[i] = scale * hstpf__dist_sample(&f->dv, hstpf__rng_next(rng));
+    }
+}
+
+/* Unit Gaussian draws for roughening, into nz_s / nz_v (free by then). */
+static void draw_unit(hstpf_t *f, hstpf_rng_t *rng)
+{
+    uint16_t i;
+    for (i = 0; i < f->cfg.n_particles; ++i) {
+        f->nz_s[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+        f->nz_v[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+    }
+}
+
+static int roughening_on(const hstpf_t *f)
+{
+    return f->cfg.roughening_k > 0.0 || f->cfg.rough_min_s > 0.0 || f->cfg.rough_min_v > 0.0;
+}
+
+/* Roughening (Gordon et al. 1993): jitter of sd k * spread * n^(-1/2),
+ * with the unit draws in nz_s / nz_v. */
 static void roughen(hstpf_t *f, hstpf_model_t *m)
 {
     const uint16_t n = f->cfg.n_particles;
@@ -319,39 +356,47 @@ static void roughen(hstpf_t *f, hstpf_model_t *m)
     kv = k * (vmax - vmin);
     ks = ks > (real)f->cfg.rough_min_s ? ks : (real)f->cfg.rough_min_s;
     kv = kv > (real)f->cfg.rough_min_v ? kv : (real)f->cfg.rough_min_v;
-    if (ks <= (real)0 && kv <= (real)0) {
-        return;
-    }
     for (i = 0; i < n; ++i) {
-        m->s[i] += ks * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
-        m->v[i] += kv * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+        m->s[i] += ks * f->nz_s[i];
+        m->v[i] += kv * f->nz_v[i];
     }
 }
 
-/* One model: propagate, weight, estimate, resample. Returns the model's
- * log-likelihood increment (0 without a measurement). */
-static real model_step(hstpf_t *f, hstpf_model_t *m, real dt, real xu, real scale, int has_y, real yr)
+/* Normalises m->lw; the linear weights go to w. Returns log of the sum
+ * before normalising (the likelihood increment when lw held lw + l). */
+static real normalise(const hstpf_t *f, hstpf_model_t *m, real *w)
 {
     const uint16_t n = f->cfg.n_particles;
-    real *w = f->scratch;
-    real lmax = (real)-1e30, sum = 0, sw2 = 0, ms = 0, mv = 0, inc = 0;
+    real lmax = m->lw[0], sum = 0, lsum;
+    uint16_t i;
+    for (i = 1; i < n; ++i) {
+        lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
+    }
+    for (i = 0; i < n; ++i) {
+        w[i] = hstpf__exp_neg(m->lw[i] - lmax);
+        sum += w[i];
+    }
+    /* sum >= 1: the best particle contributes exp(0) */
+    lsum = lmax + (real)log((double)sum);
+    for (i = 0; i < n; ++i) {
+        m->lw[i] -= lsum;
+        w[i] /= sum;
+    }
+    return lsum;
+}
+
+/* One model: propagate with the drawn noise, weight by the measurement,
+ * estimate. Returns the log-likelihood increment (0 without a measurement);
+ * the normalised weights are left in w. */
+static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has_y, real yr, real *w)
+{
+    const uint16_t n = f->cfg.n_particles;
+    real sw2 = 0, ms = 0, mv = 0, inc = 0;
     uint16_t i, at_floor = 0;
     const int track = f->cfg.n_track > 0u;
 
-    uint32_t rs = 0, rv = 0;
     for (i = 0; i < n; ++i) {
         const real s = m->s[i], v = m->v[i];
-        real ws, wv;
-        /* antithetic pairs: odd particles take u' = 1 - u of the even ones */
-        if ((i & 1u) == 0u || !f->cfg.antithetic) {
-            rs = hstpf__rng_next(&m->rng);
-            rv = hstpf__rng_next(&m->rng);
-        } else {
-            rs = ~rs;
-            rv = ~rv;
-        }
-        ws = scale * hstpf__dist_sample(&f->ds, rs);
-        wv = scale * hstpf__dist_sample(&f->dv, rv);
         real a = xu - m->k0 - (m->k1 + m->k2 * v) * v, vd;
         if (track) {
             a -= track_acc(f, &m->track_hint, s);
@@ -360,69 +405,91 @@ static real model_step(hstpf_t *f, hstpf_model_t *m, real dt, real xu, real scal
         if (v >= (real)0 && vd < (real)0) {
             vd = 0; /* resistance and braking cannot reverse the train */
         }
-        m->s[i] = s + dt * v + ws;
-        m->v[i] = vd + wv;
+        m->s[i] = s + dt * v + f->nz_s[i];
+        m->v[i] = vd + f->nz_v[i];
         if (has_y) {
             const real l = hstpf__dist_logpdf(&f->de, yr - m->s[i]);
             at_floor = (uint16_t)(at_floor + (l <= f->de.floor));
             m->lw[i] += l;
-            lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
         }
     }
-    if (!has_y) {
-        /* weights unchanged: estimate with them */
-        for (i = 0; i < n; ++i) {
-            const real wi = hstpf__exp_neg(m->lw[i]);
-            sum += wi;
-            ms += wi * m->s[i];
-            mv += wi * m->v[i];
-        }
-        m->s_mean = ms / sum;
-        m->v_mean = mv / sum;
-        m->loglik = 0;
-        return 0;
-    }
-    if (at_floor == n) {
+    if (has_y && at_floor == n) {
         ++m->floor_hits;
     }
+    /* lw was normalised, so the log of the new sum is log sum W_i p(y|x_i) */
+    inc = normalise(f, m, w);
     for (i = 0; i < n; ++i) {
-        w[i] = hstpf__exp_neg(m->lw[i] - lmax);
-        sum += w[i];
-    }
-    /* sum >= 1: the best particle contributes exp(0) */
-    {
-        const real lsum = (real)log((double)sum);
-        const real inv = (real)1 / sum;
-        for (i = 0; i < n; ++i) {
-            m->lw[i] -= lmax + lsum; /* normalised again */
-        }
-        inc = lmax + lsum;
-        for (i = 0; i < n; ++i) {
-            w[i] *= inv;
-            sw2 += w[i] * w[i];
-            ms += w[i] * m->s[i];
-            mv += w[i] * m->v[i];
-        }
+        sw2 += w[i] * w[i];
+        ms += w[i] * m->s[i];
+        mv += w[i] * m->v[i];
     }
     m->s_mean = ms;
     m->v_mean = mv;
     m->ess = (real)1 / sw2;
-    if (f->cfg.weight_method == HSTPF_WEIGHT_PAPER) {
+    if (!has_y) {
+        inc = 0;
+    } else if (f->cfg.weight_method == HSTPF_WEIGHT_PAPER) {
         inc = hstpf__dist_logpdf(&f->de, yr - ms);
-    }
-    if (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < (real)f->cfg.ess_threshold * (real)n) {
-        const real lw0 = (real)-log((double)n);
-        hstpf__resample_counts(w, n, hstpf__rng_uniform(&m->rng), f->counts);
-        hstpf__replicate(m->s, m->v, f->counts, n);
-        for (i = 0; i < n; ++i) {
-            m->lw[i] = lw0;
-        }
-        if (f->cfg.roughening_k > 0.0 || f->cfg.rough_min_s > 0.0 || f->cfg.rough_min_v > 0.0) {
-            roughen(f, m);
-        }
     }
     m->loglik = inc;
     return inc;
+}
+
+/* Independent bank: each model resamples on its own weights and stream. */
+static void resample_own(hstpf_t *f, hstpf_model_t *m, const real *w)
+{
+    const uint16_t n = f->cfg.n_particles;
+    const real lw0 = (real)-log((double)n);
+    uint16_t i;
+    hstpf__resample_counts(w, n, hstpf__rng_uniform(&m->rng), f->counts);
+    hstpf__replicate(m->s, m->v, NULL, f->counts, n);
+    for (i = 0; i < n; ++i) {
+        m->lw[i] = lw0;
+    }
+    if (roughening_on(f)) {
+        draw_unit(f, &m->rng);
+        roughen(f, m);
+    }
+}
+
+/* Paired bank: one set of ancestors for all models, drawn from the
+ * defensive mixture a; each model keeps the correction W_l / a. */
+static void resample_paired(hstpf_t *f)
+{
+    const uint16_t n = f->cfg.n_particles, nm = f->cfg.n_models;
+    real *a = f->scratch;
+    uint16_t i, l;
+    for (i = 0; i < n; ++i) {
+        a[i] = 0;
+    }
+    for (l = 0; l < nm; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const real mix = (real)(0.5 * exp(m->logq) + 0.5 / (double)nm);
+        for (i = 0; i < n; ++i) {
+            a[i] += mix * hstpf__exp_neg(m->lw[i]);
+        }
+    }
+    hstpf__resample_counts(a, n, hstpf__rng_uniform(&f->rng), f->counts);
+    for (i = 0; i < n; ++i) {
+        a[i] = f->counts[i] > 0u ? hstpf__log_pos(a[i]) : (real)0; /* chosen => a > 0 */
+    }
+    for (l = 0; l < nm; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        for (i = 0; i < n; ++i) {
+            m->lw[i] -= a[i];
+        }
+        hstpf__replicate(m->s, m->v, m->lw, f->counts, n);
+    }
+    if (roughening_on(f)) {
+        draw_unit(f, &f->rng);
+    }
+    for (l = 0; l < nm; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        (void)normalise(f, m, a);
+        if (roughening_on(f)) {
+            roughen(f, m);
+        }
+    }
 }
 
 static void update_model_weights(hstpf_t *f)
@@ -566,11 +633,33 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (has_y) {
         yr = (real)(in->position_m - f->origin_m);
     }
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        (void)model_step(f, &f->m[l], (real)in->dt_s, (real)(f->xi * in->traction), scale, has_y, yr);
-    }
-    if (has_y) {
-        update_model_weights(f);
+    {
+        const int paired = f->cfg.bank == HSTPF_BANK_PAIRED;
+        const real dt = (real)in->dt_s, xu = (real)(f->xi * in->traction);
+        const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles;
+        double ess_mix = 0.0;
+        if (paired) {
+            draw_noise(f, &f->rng, scale);
+        }
+        for (l = 0; l < f->cfg.n_models; ++l) {
+            hstpf_model_t *m = &f->m[l];
+            if (!paired) {
+                draw_noise(f, &m->rng, scale);
+            }
+            (void)model_update(f, m, dt, xu, has_y, yr, f->scratch);
+            if (!paired && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < thr)) {
+                resample_own(f, m, f->scratch);
+            }
+        }
+        if (has_y) {
+            update_model_weights(f);
+        }
+        for (l = 0; paired && l < f->cfg.n_models; ++l) {
+            ess_mix += exp(f->m[l].logq) * (double)f->m[l].ess;
+        }
+        if (paired && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || ess_mix < (double)thr)) {
+            resample_paired(f);
+        }
     }
     f->time_s += in->dt_s;
     ++f->steps;

@@ -10,7 +10,10 @@
 void hstpf__resample_counts(const hstpf_real_t *w, uint16_t n, hstpf_real_t u0, uint16_t *counts);
 
 /* In place: each survivor keeps its slot, extra copies fill the slots of
- * particles with count 0. counts[] is left with zeros in the filled slots. */
-void hstpf__replicate(hstpf_real_t *s, hstpf_real_t *v, uint16_t *counts, uint16_t n);
+ * particles with count 0; s, v and (if not NULL) lw move together.
+ * counts[] is not changed, so the same counts can be applied to several
+ * models. */
+void hstpf__replicate(hstpf_real_t *s, hstpf_real_t *v, hstpf_real_t *lw, const uint16_t *counts,
+                      uint16_t n);
 
 #endif

@@ -277,7 +277,7 @@ static void usage(void)
             "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE] [--trace FILE]\n"
             "  filter settings: [--particles M] [--resample always|ess] [--ess F]\n"
-            "  [--streams common|independent] [--antithetic 0|1] [--rough K] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
+            "  [--bank paired|independent] [--rough K] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X]\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
@@ -331,10 +331,8 @@ int main(int argc, char **argv)
             st.base.resample = !strcmp(v, "always") ? HSTPF_RESAMPLE_ALWAYS : HSTPF_RESAMPLE_ESS;
         } else if (!strcmp(a, "--ess")) {
             st.base.ess_threshold = atof(v);
-        } else if (!strcmp(a, "--streams")) {
-            st.base.common_random = (uint8_t)(!strcmp(v, "common"));
-        } else if (!strcmp(a, "--antithetic")) {
-            st.base.antithetic = (uint8_t)atoi(v);
+        } else if (!strcmp(a, "--bank")) {
+            st.base.bank = !strcmp(v, "independent") ? HSTPF_BANK_INDEPENDENT : HSTPF_BANK_PAIRED;
         } else if (!strcmp(a, "--rough")) {
             st.base.roughening_k = atof(v);
         } else if (!strcmp(a, "--rough-min-v")) {

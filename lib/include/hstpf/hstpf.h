@@ -86,22 +86,36 @@ typedef enum {
     HSTPF_RESAMPLE_ESS = 1     /**< when ESS < ess_threshold x particles */
 } hstpf_resample_t;
 
+/** How the filters of the bank relate. */
+typedef enum {
+    /** Model l draws from its own RNG stream l and resamples on its own
+     *  weights: independent filters. Their likelihood estimates carry
+     *  independent Monte Carlo noise, which for near-identical models can
+     *  decide between them by chance. */
+    HSTPF_BANK_INDEPENDENT = 0,
+    /** Paired filters: each step's process noise is drawn once, from the
+     *  instance's stream, and used by every model; resampling picks one set
+     *  of ancestors for all models from a defensive mixture of their
+     *  weights, a = sum_l (q_l + 1/n) / 2 * W_l, and each model keeps the
+     *  importance correction W_l / a. Particle i of every model is then the
+     *  same particle under different dynamics, so the Monte Carlo noise of
+     *  the likelihood estimates is shared and cancels in the comparison of
+     *  similar models. Results still do not depend on loop order. For
+     *  models that differ clearly the shared ancestry leaves each model few
+     *  particles of its own and its likelihood is underestimated: use it
+     *  for banks of near-identical models only. */
+    HSTPF_BANK_PAIRED = 1
+} hstpf_bank_t;
+
 /** Configuration; fill with hstpf_config_default() then change fields. */
 typedef struct {
     const hstpf_theta_t *models; /**< n_models rows, read during init only */
     uint16_t n_models;           /**< 1..HSTPF_MAX_MODELS */
     uint16_t n_particles;        /**< 2..HSTPF_MAX_PARTICLES (default 100) */
-    uint64_t seed;               /**< RNG seed */
-    /** 1: every model's generator starts from the same stream (common
-     *  random numbers: the particle-noise of the likelihood estimates is
-     *  shared and cancels in the model comparison); 0: model l uses
-     *  stream l. Either way each model owns its generator, so results do not
-     *  depend on loop order (0: measured no gain, docs/results.md). */
-    uint8_t common_random;
-    /** 1: process noise drawn in antithetic pairs (u, 1 - u through the
-     *  inverse CDF), which cancels the noise's share of the error in the
-     *  cloud's mean for any distribution (0: measured no gain). */
-    uint8_t antithetic;
+    uint64_t seed;               /**< RNG seed; streams: model l uses l, the paired bank HSTPF_MAX_MODELS */
+    /** How the models' particle filters share randomness (see the enum);
+     *  (HSTPF_BANK_INDEPENDENT; docs/results.md measures both). */
+    hstpf_bank_t bank;
     double gamma_rot;            /**< rotating-mass factor, [0, 1] (0.06) */
     hstpf_dist_spec_t noise_s;   /**< w_s, m per step (N(0, sqrt 0.02)) */
     hstpf_dist_spec_t noise_v;   /**< w_v, m/s per step (N(0, sqrt 0.05)) */
@@ -207,7 +221,10 @@ typedef struct {
     hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS];
     hstpf_real_t track_rel[HSTPF_MAX_TRACK_SEGMENTS]; /* starts - origin */
     hstpf_real_t track_acc[HSTPF_MAX_TRACK_SEGMENTS]; /* xi (i + 600/R) */
+    hstpf_rng_t rng;                 /* the paired bank's common stream */
     hstpf_real_t scratch[HSTPF_MAX_PARTICLES];
+    hstpf_real_t nz_s[HSTPF_MAX_PARTICLES]; /* this step's noise draws */
+    hstpf_real_t nz_v[HSTPF_MAX_PARTICLES];
     uint16_t counts[HSTPF_MAX_PARTICLES];
     double origin_m;                 /* particles are relative to this */
     double time_s;
