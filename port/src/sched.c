@@ -1,0 +1,235 @@
+/* hstpfd: step scheduler (see sched.h for the rules). */
+#include "sched.h"
+
+#include <string.h>
+
+#define G_N 9.81 /* 1 t weighs 9.81 kN */
+
+double hstpfd_traction_unit(double force_kn, double mass_t)
+{
+    return force_kn * 1000.0 / (mass_t * G_N);
+}
+
+static int64_t us_of(double s)
+{
+    return (int64_t)(s * 1e6 + 0.5);
+}
+
+static int pos_fin(double x)
+{
+    return x > 0.0 && x < 1e12; /* also false for NaN */
+}
+
+int hstpfd_sched_init(hstpfd_sched_t *s, const hstpfd_sched_config_t *cfg, hstpfd_step_fn fn, void *ctx)
+{
+    const hstpfd_sched_config_t *c = cfg;
+    if (s == NULL || c == NULL) {
+        return -1;
+    }
+    if (!(c->step_period_s >= 0.0 && c->step_period_s <= HSTPF_DT_MAX_S) || !pos_fin(c->pos_timeout_s) ||
+        !pos_fin(c->trac_timeout_s) || !pos_fin(c->predict_period_s) ||
+        c->predict_period_s > HSTPF_DT_MAX_S || !pos_fin(c->max_gap_s) || !pos_fin(c->first_dt_s) ||
+        c->first_dt_s > HSTPF_DT_MAX_S || !pos_fin(c->mass_t) ||
+        (c->traction_mode != HSTPFD_TRACTION_MEAN && c->traction_mode != HSTPFD_TRACTION_LATEST) ||
+        (c->stale_policy != HSTPFD_STALE_PREDICT && c->stale_policy != HSTPFD_STALE_WAIT)) {
+        return -1;
+    }
+    memset(s, 0, sizeof *s);
+    s->cfg = *c;
+    s->fn = fn;
+    s->ctx = ctx;
+    s->step_us = us_of(c->step_period_s);
+    s->pos_to_us = us_of(c->pos_timeout_s);
+    s->trac_to_us = us_of(c->trac_timeout_s);
+    s->pred_us = us_of(c->predict_period_s);
+    s->gap_us = us_of(c->max_gap_s);
+    s->first_us = us_of(c->first_dt_s);
+    s->dtmax_us = us_of(HSTPF_DT_MAX_S);
+    return 0;
+}
+
+/* Forgets the held traction before t0: one segment holding s->u from t0. */
+static void seg_reset(hstpfd_sched_t *s, int64_t t0)
+{
+    s->seg_t[0] = t0;
+    s->seg_u[0] = s->u;
+    s->n_seg = 1;
+}
+
+/* u from t on (t >= every segment start). */
+static void seg_push(hstpfd_sched_t *s, int64_t t, double u)
+{
+    if (s->n_seg > 0 && s->seg_t[s->n_seg - 1] == t) {
+        s->seg_u[s->n_seg - 1] = u;
+        return;
+    }
+    if (s->n_seg == HSTPFD_SCHED_SEGMENTS) { /* merge the two oldest */
+        const double d0 = (double)(s->seg_t[1] - s->seg_t[0]);
+        const double d1 = (double)(s->seg_t[2] - s->seg_t[1]);
+        s->seg_u[0] = (s->seg_u[0] * d0 + s->seg_u[1] * d1) / (d0 + d1);
+        memmove(&s->seg_t[1], &s->seg_t[2], (size_t)(s->n_seg - 2) * sizeof s->seg_t[0]);
+        memmove(&s->seg_u[1], &s->seg_u[2], (size_t)(s->n_seg - 2) * sizeof s->seg_u[0]);
+        --s->n_seg;
+    }
+    s->seg_t[s->n_seg] = t;
+    s->seg_u[s->n_seg] = u;
+    ++s->n_seg;
+}
+
+/* Mean (MEAN) or end value (LATEST) of the held traction over [a, b], a < b,
+ * a = seg_t[0]; then drops what lies before b. */
+static double seg_take(hstpfd_sched_t *s, int64_t a, int64_t b)
+{
+    double acc = 0.0, last = s->seg_u[0];
+    uint16_t i, keep;
+    for (i = 0; i < s->n_seg && s->seg_t[i] <= b; ++i) {
+        const int64_t lo = s->seg_t[i] > a ? s->seg_t[i] : a;
+        const int64_t hi = (i + 1 < s->n_seg && s->seg_t[i + 1] < b) ? s->seg_t[i + 1] : b;
+        if (hi > lo) {
+            acc += s->seg_u[i] * (double)(hi - lo);
+        }
+        last = s->seg_u[i];
+    }
+    /* i - 1 is the segment that holds at b: it becomes the first */
+    keep = (uint16_t)(i - 1);
+    if (keep > 0) {
+        memmove(&s->seg_t[0], &s->seg_t[keep], (size_t)(s->n_seg - keep) * sizeof s->seg_t[0]);
+        memmove(&s->seg_u[0], &s->seg_u[keep], (size_t)(s->n_seg - keep) * sizeof s->seg_u[0]);
+        s->n_seg = (uint16_t)(s->n_seg - keep);
+    }
+    s->seg_t[0] = b;
+    if (s->cfg.traction_mode == HSTPFD_TRACTION_LATEST) {
+        return last;
+    }
+    return acc / (double)(b - a);
+}
+
+/* Emits the step [t_step, t_end] (t_end > t_step). */
+static void emit(hstpfd_sched_t *s, int64_t t_end, int has_pos, double y, int restart, int stale)
+{
+    hstpfd_step_t st;
+    memset(&st, 0, sizeof st);
+    if (restart) {
+        st.in.dt_s = (double)s->first_us / 1e6;
+        st.in.traction = s->u;
+        seg_reset(s, t_end);
+    } else {
+        st.in.dt_s = (double)(t_end - s->t_step) / 1e6;
+        st.in.traction = seg_take(s, s->t_step, t_end);
+    }
+    st.in.position_m = has_pos ? y : 0.0;
+    st.in.has_position = (uint8_t)(has_pos != 0);
+    st.t_us = t_end;
+    st.restart = (uint8_t)(restart != 0);
+    st.pos_stale = (uint8_t)(stale != 0);
+    st.trac_stale = s->trac_stale;
+    st.no_traction = (uint8_t)!s->have_u;
+    s->t_step = t_end;
+    s->have_step = 1;
+    ++s->n.steps;
+    if (!has_pos) {
+        ++s->n.predict_steps;
+    }
+    if (s->fn != NULL) {
+        s->fn(s->ctx, &st);
+    }
+}
+
+static void advance(hstpfd_sched_t *s, int64_t t)
+{
+    if (!s->started) {
+        s->started = 1;
+        s->t_now = s->t_start = s->t_step = t;
+        seg_reset(s, t);
+    }
+    if (t < s->t_now) {
+        ++s->n.time_backwards;
+        t = s->t_now;
+    }
+    s->t_now = t;
+    if (!s->trac_stale && t - (s->have_trac ? s->t_trac : s->t_start) > s->trac_to_us) {
+        s->trac_stale = 1;
+        ++s->n.trac_stale;
+    }
+    if (!s->pos_stale && t - (s->have_pos ? s->t_pos : s->t_start) > s->pos_to_us) {
+        s->pos_stale = 1;
+        ++s->n.pos_stale;
+    }
+    if (s->pos_stale && s->have_step && s->cfg.stale_policy == HSTPFD_STALE_PREDICT) {
+        while (t - s->t_step > s->pred_us) {
+            emit(s, s->t_step + s->pred_us, 0, 0.0, 0, 1);
+        }
+    }
+    if (!s->have_step) {
+        /* before the first fix nothing is estimated: only the latest u counts */
+        s->t_step = t;
+        seg_reset(s, t);
+    }
+}
+
+void hstpfd_sched_time(hstpfd_sched_t *s, int64_t t_us)
+{
+    advance(s, t_us);
+}
+
+void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn)
+{
+    advance(s, t_us);
+    s->u = hstpfd_traction_unit(force_kn, s->cfg.mass_t);
+    seg_push(s, s->t_now, s->u);
+    s->have_u = 1;
+    s->have_trac = 1;
+    s->t_trac = s->t_now;
+    s->trac_stale = 0;
+}
+
+void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m)
+{
+    int64_t gap;
+    const int had_step = s->have_step;
+    advance(s, t_us);
+    t_us = s->t_now;
+    s->have_pos = 1;
+    s->t_pos = t_us;
+    if (!had_step) {
+        /* the first step has length first_dt_s and the traction held now */
+        s->pos_stale = 0;
+        s->t_step = t_us - s->first_us;
+        seg_reset(s, s->t_step);
+        s->t_due = t_us + s->step_us;
+        emit(s, t_us, 1, position_m, 0, 0);
+        return;
+    }
+    gap = t_us - s->t_step;
+    if (gap <= 0) {
+        ++s->n.late;
+        s->pos_stale = 0;
+        return;
+    }
+    if (s->step_us > 0 && !s->pos_stale) {
+        if (t_us < s->t_due - s->step_us / 50) {
+            ++s->n.decimated;
+            return;
+        }
+        s->t_due += s->step_us;
+    }
+    if (s->t_due <= t_us) {
+        s->t_due = t_us + s->step_us; /* fell behind the grid: start it again */
+    }
+    s->pos_stale = 0;
+    if (gap > s->gap_us) {
+        ++s->n.restarts;
+        emit(s, t_us, 1, position_m, 1, 0);
+        return;
+    }
+    if (gap > s->dtmax_us) {
+        const int64_t pieces = (gap + s->dtmax_us - 1) / s->dtmax_us;
+        const int64_t t0 = s->t_step;
+        int64_t k;
+        ++s->n.split;
+        for (k = 1; k < pieces; ++k) {
+            emit(s, t0 + gap * k / pieces, 0, 0.0, 0, 0);
+        }
+    }
+    emit(s, t_us, 1, position_m, 0, 0);
+}

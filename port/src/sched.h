@@ -1,0 +1,110 @@
+/* hstpfd: step scheduler. Turns a time-ordered stream of valid position and
+ * traction samples (and bare time ticks) into hstpf_step() inputs.
+ * Portable C99, no OS, no heap; time only from the samples' timestamps.
+ *
+ * Rules (docs/daemon.md, "Scheduling"):
+ * - A valid position frame triggers a step (step_period_s = 0), or, with
+ *   step_period_s = P > 0, only the first one at or after each point of a
+ *   grid of period P started at the first fix (2 % of P early counts as
+ *   on time: timestamp jitter); the skipped frames are counted. After a
+ *   gap the grid restarts at the step that ends it.
+ * - dt = time of this position - time of the last step (first step:
+ *   first_dt_s). A position not newer than the last step is dropped (late).
+ * - Traction: zero-order hold of the latest valid sample, converted from
+ *   total force (kN) to unit force (N/kN) with the train mass. MEAN: the
+ *   time-weighted mean of the held value over the step; LATEST: the value
+ *   of the latest sample at or before the step's end. Before any traction
+ *   sample: 0. A stale traction input keeps its last value (flagged and
+ *   counted).
+ * - Position stale: no valid position for more than pos_timeout_s (counted
+ *   once per episode). Policy PREDICT: predict-only steps (has_position = 0)
+ *   of predict_period_s each while stale; WAIT: no steps until the next
+ *   valid position.
+ * - A step longer than HSTPF_DT_MAX_S is split into equal predict-only
+ *   pieces; a gap longer than max_gap_s restarts the estimator (restart
+ *   flag on the step: the caller resets it) with the new position as the
+ *   first fix.
+ * - Time never goes back: an earlier timestamp counts as time_backwards and
+ *   is taken as the latest time seen. */
+#ifndef HSTPFD_SCHED_H
+#define HSTPFD_SCHED_H
+
+#include <stdint.h>
+
+#include "hstpf/hstpf.h"
+
+/* Traction changes remembered within one step (more are merged). */
+#define HSTPFD_SCHED_SEGMENTS 128
+
+typedef enum { HSTPFD_TRACTION_MEAN = 0, HSTPFD_TRACTION_LATEST = 1 } hstpfd_traction_mode_t;
+typedef enum { HSTPFD_STALE_PREDICT = 0, HSTPFD_STALE_WAIT = 1 } hstpfd_stale_policy_t;
+
+typedef struct {
+    double step_period_s;    /* 0: a step per valid position frame */
+    double pos_timeout_s;    /* > 0 */
+    double trac_timeout_s;   /* > 0 */
+    double predict_period_s; /* (0, HSTPF_DT_MAX_S] */
+    double max_gap_s;        /* > 0 */
+    double first_dt_s;       /* (0, HSTPF_DT_MAX_S] */
+    double mass_t;           /* > 0 */
+    hstpfd_traction_mode_t traction_mode;
+    hstpfd_stale_policy_t stale_policy;
+} hstpfd_sched_config_t;
+
+/* One step for the estimator. */
+typedef struct {
+    hstpf_input_t in;
+    int64_t t_us;        /* time at the end of the step */
+    uint8_t restart;     /* reset the estimator before this step */
+    uint8_t pos_stale;   /* position input stale when the step was made */
+    uint8_t trac_stale;  /* traction input stale (value held) */
+    uint8_t no_traction; /* no valid traction seen yet (u = 0) */
+} hstpfd_step_t;
+
+typedef void (*hstpfd_step_fn)(void *ctx, const hstpfd_step_t *step);
+
+typedef struct {
+    uint32_t steps;            /* steps emitted */
+    uint32_t predict_steps;    /* of which predict-only */
+    uint32_t pos_stale;        /* position stale episodes */
+    uint32_t trac_stale;       /* traction stale episodes */
+    uint32_t decimated;        /* valid positions skipped by the period */
+    uint32_t late;             /* positions not newer than the last step */
+    uint32_t time_backwards;   /* timestamps earlier than the latest seen */
+    uint32_t restarts;         /* gaps beyond max_gap_s */
+    uint32_t split;            /* steps split because longer than HSTPF_DT_MAX_S */
+} hstpfd_sched_counts_t;
+
+typedef struct {
+    hstpfd_sched_config_t cfg;
+    hstpfd_step_fn fn;
+    void *ctx;
+    int64_t step_us, pos_to_us, trac_to_us, pred_us, gap_us, first_us, dtmax_us;
+    uint8_t started, have_step, have_u, have_pos, have_trac, pos_stale, trac_stale;
+    int64_t t_now, t_start, t_step, t_pos, t_trac;
+    int64_t t_due;  /* next point of the decimation grid */
+    double u;       /* latest unit traction, N/kN */
+    /* The held traction since t_step as segments: seg_u[i] from seg_t[i] to
+     * seg_t[i+1] (the last one to now), so that a step ending in the past
+     * (a predict step found due late) gets exactly its own interval's mean.
+     * When full, the two oldest segments merge (the integral stays exact). */
+    int64_t seg_t[HSTPFD_SCHED_SEGMENTS];
+    double seg_u[HSTPFD_SCHED_SEGMENTS];
+    uint16_t n_seg;
+    hstpfd_sched_counts_t n;
+} hstpfd_sched_t;
+
+/* Unit traction force, N/kN, from total force (kN) and mass (t). */
+double hstpfd_traction_unit(double force_kn, double mass_t);
+
+/* Returns 0, or -1 if a config value is out of range (fn may be NULL). */
+int hstpfd_sched_init(hstpfd_sched_t *s, const hstpfd_sched_config_t *cfg, hstpfd_step_fn fn, void *ctx);
+/* Time has advanced to t_us without a valid sample (an invalid frame, an
+ * unrelated frame, an idle tick). */
+void hstpfd_sched_time(hstpfd_sched_t *s, int64_t t_us);
+/* A valid traction sample: total force, kN (+ traction, - braking). */
+void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn);
+/* A valid position sample, m. */
+void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m);
+
+#endif

@@ -1,0 +1,236 @@
+/* cmocka tests: hstpfd configuration keys, file parser, overrides. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "config.h"
+
+static hstpfd_config_t cfg, cfg2;
+static char err[HSTPFD_ERR_MAX];
+
+static void test_defaults(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(cfg.n_models, 17);
+    assert_string_equal(cfg.models[2].name, "CRH3");
+    assert_true(cfg.models[2].name == cfg.model_name[2]);
+    assert_int_equal(cfg.particles, 100);
+    assert_int_equal(cfg.noise_e.kind, HSTPF_DIST_GAUSSIAN);
+    assert_float_equal(cfg.noise_e.sd * cfg.noise_e.sd, 5.0, 1e-12);
+    assert_int_equal(cfg.sched.traction_mode, HSTPFD_TRACTION_MEAN);
+    assert_int_equal(cfg.sched.stale_policy, HSTPFD_STALE_PREDICT);
+    assert_int_equal(cfg.send, 1);
+}
+
+static void test_set_numbers(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", " 256 ", err, sizeof err), 0);
+    assert_int_equal(cfg.particles, 256);
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "257", err, sizeof err), -1);
+    assert_non_null(strstr(err, "particles"));
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "1", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "-5", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "12x", err, sizeof err), -1);
+    assert_int_equal(cfg.particles, 256); /* unchanged by the failures */
+    assert_int_equal(hstpfd_config_set(&cfg, "seed", "0x10", err, sizeof err), 0);
+    assert_true(cfg.seed == 16u);
+    assert_int_equal(hstpfd_config_set(&cfg, "seed", "18446744073709551615", err, sizeof err), 0);
+    assert_true(cfg.seed == UINT64_MAX);
+    assert_int_equal(hstpfd_config_set(&cfg, "seed", "18446744073709551616", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "mass_t", "480.5", err, sizeof err), 0);
+    assert_float_equal(cfg.mass_t, 480.5, 0.0);
+    assert_int_equal(hstpfd_config_set(&cfg, "mass_t", "0", err, sizeof err), -1); /* (0, ...] */
+    assert_int_equal(hstpfd_config_set(&cfg, "mass_t", "nan", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "mass_t", "inf", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "mass_t", "", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "gamma_rot", "0", err, sizeof err), 0); /* [0, 1] */
+    assert_int_equal(hstpfd_config_set(&cfg, "gamma_rot", "1.01", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "step_period_s", "0", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "2.5", err, sizeof err), 0);
+    assert_float_equal(cfg.sched.pos_timeout_s, 2.5, 0.0);
+    assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "15", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "1", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "send", "no", err, sizeof err), 0);
+    assert_int_equal(cfg.send, 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "send", "maybe", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", err, sizeof err), -1);
+    assert_non_null(strstr(err, "unknown key 'nosuchkey'"));
+}
+
+static void test_enums(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "traction_mode", "latest", err, sizeof err), 0);
+    assert_int_equal(cfg.sched.traction_mode, HSTPFD_TRACTION_LATEST);
+    assert_int_equal(hstpfd_config_set(&cfg, "stale_policy", "wait", err, sizeof err), 0);
+    assert_int_equal(cfg.sched.stale_policy, HSTPFD_STALE_WAIT);
+    assert_int_equal(hstpfd_config_set(&cfg, "stale_policy", "panic", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "out_format", "csv", err, sizeof err), 0);
+    assert_int_equal(cfg.out_format, HSTPFD_OUT_CSV);
+    assert_int_equal(hstpfd_config_set(&cfg, "out_format", "xml", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "noise", "case2", err, sizeof err), 0);
+    assert_int_equal(cfg.noise_v.kind, HSTPF_DIST_GAMMA);
+    assert_float_equal(cfg.noise_v.shape, 0.1, 0.0);
+    assert_float_equal(cfg.noise_v.scale, 0.05, 0.0);
+    assert_int_equal(hstpfd_config_set(&cfg, "noise", "case3", err, sizeof err), -1);
+}
+
+static void test_noise(void **state)
+{
+    hstpf_dist_spec_t d;
+    (void)state;
+    assert_int_equal(hstpfd_parse_noise("gaussian:0.5:2", &d, err, sizeof err), 0);
+    assert_int_equal(d.kind, HSTPF_DIST_GAUSSIAN);
+    assert_float_equal(d.mean, 0.5, 0.0);
+    assert_float_equal(d.sd, 2.0, 0.0);
+    assert_int_equal(hstpfd_parse_noise("gamma : 0.5 : 0.2 : -1", &d, err, sizeof err), 0);
+    assert_int_equal(d.kind, HSTPF_DIST_GAMMA);
+    assert_float_equal(d.shape, 0.5, 0.0);
+    assert_float_equal(d.scale, 0.2, 0.0);
+    assert_float_equal(d.loc, -1.0, 0.0);
+    assert_int_equal(hstpfd_parse_noise("gamma:0.5:0.2", &d, err, sizeof err), 0); /* loc 0 */
+    assert_float_equal(d.loc, 0.0, 0.0);
+    assert_int_equal(hstpfd_parse_noise("gaussian:0:0", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("gaussian:0", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("gaussian:0:1:2", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("gamma:0.0001:1:0", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("gamma:1:-1:0", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("cauchy:0:1", &d, err, sizeof err), -1);
+    assert_int_equal(hstpfd_parse_noise("gaussian:a:1", &d, err, sizeof err), -1);
+}
+
+static void test_models(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "SS1/SS3/SS4, CRH3 ,SS8, Mine:1:0.01:0.0002", err, sizeof err),
+                     0);
+    assert_int_equal(cfg.n_models, 4);
+    assert_string_equal(cfg.models[0].name, "SS1/SS3/SS4");
+    assert_float_equal(cfg.models[0].c0, 2.25, 0.0);
+    assert_string_equal(cfg.models[1].name, "CRH3");
+    assert_float_equal(cfg.models[1].c2, 0.000115, 0.0);
+    assert_string_equal(cfg.models[3].name, "Mine");
+    assert_float_equal(cfg.models[3].c1, 0.01, 0.0);
+    assert_true(cfg.models[3].name == cfg.model_name[3]);
+    /* errors leave the set unchanged */
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "CRH3, CRH9", err, sizeof err), -1);
+    assert_non_null(strstr(err, "CRH9"));
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "CRH3, CRH3", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "X:1:2", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "X:60:0:0", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "X:1:0:0.02", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", " , ", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "all, CRH3", err, sizeof err), -1); /* twice */
+    assert_int_equal(cfg.n_models, 4);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "Xian Feng, all", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "Xian Feng", err, sizeof err), 0);
+    assert_int_equal(cfg.n_models, 1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "all", err, sizeof err), 0);
+    assert_int_equal(cfg.n_models, 17);
+}
+
+static void test_lines(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_line(&cfg, "", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_line(&cfg, "  # comment", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_line(&cfg, "; comment", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_line(&cfg, "[filter]", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_line(&cfg, "[filter", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_line(&cfg, "particles = 50   # fewer\r\n", err, sizeof err), 0);
+    assert_int_equal(cfg.particles, 50);
+    assert_int_equal(hstpfd_config_line(&cfg, "out = a#b.jsonl", err, sizeof err), 0);
+    assert_string_equal(cfg.out, "a#b.jsonl"); /* '#' without a blank before it is data */
+    assert_int_equal(hstpfd_config_line(&cfg, "particles 50", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_line(&cfg, " = 50", err, sizeof err), -1);
+}
+
+static void test_file_and_write(void **state)
+{
+    const char *path = HSTPFD_TEST_DIR "/test_config.ini";
+    char buf[8192];
+    FILE *fp;
+    int n;
+    (void)state;
+    fp = fopen(path, "w");
+    assert_non_null(fp);
+    fputs("# test\n[filter]\nmodels = CRH1, CRH3, CRH5\nparticles = 64\nnoise = case2\n"
+          "noise_e = gaussian:0:2.5\n[input]\nlog = run.log\nmass_t = 420\n",
+          fp);
+    fclose(fp);
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), 0);
+    assert_int_equal(cfg.n_models, 3);
+    assert_int_equal(cfg.particles, 64);
+    assert_int_equal(cfg.noise_s.kind, HSTPF_DIST_GAMMA); /* preset, then noise_e wins */
+    assert_int_equal(cfg.noise_e.kind, HSTPF_DIST_GAUSSIAN);
+    assert_string_equal(cfg.log, "run.log");
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), 0);
+    assert_float_equal(cfg.sched.mass_t, 420.0, 0.0);
+    assert_float_equal(cfg.sched.first_dt_s, cfg.dt_nominal_s, 0.0);
+
+    /* the written configuration loads back to the same values */
+    n = hstpfd_config_write(&cfg, buf, sizeof buf);
+    assert_true(n > 0);
+    fp = fopen(path, "w");
+    assert_non_null(fp);
+    fputs(buf, fp);
+    fclose(fp);
+    hstpfd_config_default(&cfg2);
+    assert_int_equal(hstpfd_config_load(&cfg2, path, err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg2, err, sizeof err), 0);
+    assert_int_equal(cfg2.n_models, cfg.n_models);
+    assert_memory_equal(&cfg2.noise_s, &cfg.noise_s, sizeof cfg.noise_s);
+    assert_memory_equal(&cfg2.noise_e, &cfg.noise_e, sizeof cfg.noise_e);
+    assert_memory_equal(&cfg2.sched, &cfg.sched, sizeof cfg.sched);
+    assert_true(cfg2.seed == cfg.seed);
+    assert_float_equal(cfg2.models[1].c2, cfg.models[1].c2, 0.0);
+
+    /* an error names the file and the line */
+    fp = fopen(path, "w");
+    assert_non_null(fp);
+    fputs("particles = 10\n\nparticles = ten\n", fp);
+    fclose(fp);
+    assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
+    assert_non_null(strstr(err, ":3: particles"));
+    remove(path);
+    assert_int_equal(hstpfd_config_load(&cfg, "/nonexistent/x.ini", err, sizeof err), -1);
+    assert_non_null(strstr(err, "/nonexistent/x.ini"));
+}
+
+static void test_finish(void **state)
+{
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1); /* no source */
+    assert_non_null(strstr(err, "exactly one source"));
+    assert_int_equal(hstpfd_config_set(&cfg, "iface", "vcan0", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "x.log", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1); /* two */
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "iface", "averyveryveryveryverylonginterfacename", err, sizeof err),
+                     -1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),   cmocka_unit_test(test_set_numbers), cmocka_unit_test(test_enums),
+        cmocka_unit_test(test_noise),      cmocka_unit_test(test_models),      cmocka_unit_test(test_lines),
+        cmocka_unit_test(test_file_and_write), cmocka_unit_test(test_finish),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
