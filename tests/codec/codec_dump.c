@@ -1,0 +1,348 @@
+/*
+ * Frame dump for tests/python/test_codec_agree.py (not a ctest itself).
+ *
+ *   hstpf_codec_dump           packs a fixed set of frames from physical
+ *                              values with the C codec (saturating raw
+ *                              conversion, cantools pack, E2E protect) and
+ *                              prints one JSON line per frame: inputs, bytes,
+ *                              and the values unpacked back by the C codec.
+ *   hstpf_codec_dump decode    reads lines "ID HEXBYTES" (ID in hex) from
+ *                              stdin and prints what the C codec unpacks and
+ *                              the E2E check result (one receiver per ID).
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hstpf_can.h"
+#include "hstpf_e2e.h"
+#include "hstpf_frames.h"
+
+static void hex(const uint8_t *f, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        printf("%02X", f[i]);
+    }
+}
+
+/* ---- encode side: one function per frame --------------------------------- */
+
+static hstpf_e2e_tx_t tx[HSTPF_FRAMES_COUNT];
+
+static hstpf_e2e_tx_t *tx_for(uint32_t id)
+{
+    const hstpf_frame_info_t *fi = hstpf_frame_find(id);
+    return &tx[fi - hstpf_frames];
+}
+
+static void head(const char *name, uint32_t id, const uint8_t *f)
+{
+    printf("{\"msg\":\"%s\",\"id\":%u,\"bytes\":\"", name, (unsigned)id);
+    hex(f, 8);
+    printf("\",");
+}
+
+static void position(double valid, double quality, double pos)
+{
+    struct hstpf_can_position_t m;
+    uint8_t f[8];
+    hstpf_can_position_init(&m);
+    m.pos_valid = hstpf_frames_position_pos_valid_raw(valid);
+    m.pos_quality = hstpf_frames_position_pos_quality_raw(quality);
+    m.position = hstpf_frames_position_position_raw(pos);
+    hstpf_can_position_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_POSITION_ID), f, 8);
+    hstpf_can_position_unpack(&m, f, 8);
+    head("Position", HSTPF_FRAME_POSITION_ID, f);
+    printf("\"in\":{\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g},", valid, quality, pos);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g}}\n",
+           m.e2e_crc, m.e2e_counter, hstpf_can_position_pos_valid_decode(m.pos_valid),
+           hstpf_can_position_pos_quality_decode(m.pos_quality), hstpf_can_position_position_decode(m.position));
+}
+
+static void traction(double valid, double force)
+{
+    struct hstpf_can_traction_t m;
+    uint8_t f[8];
+    hstpf_can_traction_init(&m);
+    m.tract_valid = hstpf_frames_traction_tract_valid_raw(valid);
+    m.tract_force = hstpf_frames_traction_tract_force_raw(force);
+    hstpf_can_traction_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_TRACTION_ID), f, 8);
+    hstpf_can_traction_unpack(&m, f, 8);
+    head("Traction", HSTPF_FRAME_TRACTION_ID, f);
+    printf("\"in\":{\"TractValid\":%.17g,\"TractForce\":%.17g},", valid, force);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"TractValid\":%.17g,\"TractForce\":%.17g}}\n", m.e2e_crc,
+           m.e2e_counter, hstpf_can_traction_tract_valid_decode(m.tract_valid),
+           hstpf_can_traction_tract_force_decode(m.tract_force));
+}
+
+static void est_state(double valid, double pos, double speed)
+{
+    struct hstpf_can_est_state_t m;
+    uint8_t f[8];
+    hstpf_can_est_state_init(&m);
+    m.est_valid = hstpf_frames_est_state_est_valid_raw(valid);
+    m.est_position = hstpf_frames_est_state_est_position_raw(pos);
+    m.est_speed = hstpf_frames_est_state_est_speed_raw(speed);
+    hstpf_can_est_state_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_STATE_ID), f, 8);
+    hstpf_can_est_state_unpack(&m, f, 8);
+    head("EstState", HSTPF_FRAME_EST_STATE_ID, f);
+    printf("\"in\":{\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g},", valid, pos, speed);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g}}\n",
+           m.e2e_crc, m.e2e_counter, hstpf_can_est_state_est_valid_decode(m.est_valid),
+           hstpf_can_est_state_est_position_decode(m.est_position), hstpf_can_est_state_est_speed_decode(m.est_speed));
+}
+
+static void est_type(double status, double decl, double dw, double lead, double lw)
+{
+    struct hstpf_can_est_type_t m;
+    uint8_t f[8];
+    hstpf_can_est_type_init(&m);
+    m.type_status = hstpf_frames_est_type_type_status_raw(status);
+    m.declared_type = hstpf_frames_est_type_declared_type_raw(decl);
+    m.declared_weight = hstpf_frames_est_type_declared_weight_raw(dw);
+    m.leader_type = hstpf_frames_est_type_leader_type_raw(lead);
+    m.leader_weight = hstpf_frames_est_type_leader_weight_raw(lw);
+    hstpf_can_est_type_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_TYPE_ID), f, 8);
+    hstpf_can_est_type_unpack(&m, f, 8);
+    head("EstType", HSTPF_FRAME_EST_TYPE_ID, f);
+    printf("\"in\":{\"TypeStatus\":%.17g,\"DeclaredType\":%.17g,\"DeclaredWeight\":%.17g,\"LeaderType\":%.17g,"
+           "\"LeaderWeight\":%.17g},",
+           status, decl, dw, lead, lw);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%.17g,\"DeclaredType\":%.17g,\"DeclaredWeight\":%.17g,"
+           "\"LeaderType\":%.17g,\"LeaderWeight\":%.17g}}\n",
+           m.e2e_crc, m.e2e_counter, hstpf_can_est_type_type_status_decode(m.type_status),
+           hstpf_can_est_type_declared_type_decode(m.declared_type),
+           hstpf_can_est_type_declared_weight_decode(m.declared_weight),
+           hstpf_can_est_type_leader_type_decode(m.leader_type), hstpf_can_est_type_leader_weight_decode(m.leader_weight));
+}
+
+static void est_theta(double valid, double sat, double c0, double c1, double c2)
+{
+    struct hstpf_can_est_theta_t m;
+    uint8_t f[8];
+    hstpf_can_est_theta_init(&m);
+    m.theta_valid = hstpf_frames_est_theta_theta_valid_raw(valid);
+    m.theta_saturated = hstpf_frames_est_theta_theta_saturated_raw(sat);
+    m.c0 = hstpf_frames_est_theta_c0_raw(c0);
+    m.c1 = hstpf_frames_est_theta_c1_raw(c1);
+    m.c2 = hstpf_frames_est_theta_c2_raw(c2);
+    hstpf_can_est_theta_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_THETA_ID), f, 8);
+    hstpf_can_est_theta_unpack(&m, f, 8);
+    head("EstTheta", HSTPF_FRAME_EST_THETA_ID, f);
+    printf("\"in\":{\"ThetaValid\":%.17g,\"ThetaSaturated\":%.17g,\"C0\":%.17g,\"C1\":%.17g,\"C2\":%.17g},", valid,
+           sat, c0, c1, c2);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"ThetaValid\":%.17g,\"ThetaSaturated\":%.17g,\"C0\":%.17g,"
+           "\"C1\":%.17g,\"C2\":%.17g}}\n",
+           m.e2e_crc, m.e2e_counter, hstpf_can_est_theta_theta_valid_decode(m.theta_valid),
+           hstpf_can_est_theta_theta_saturated_decode(m.theta_saturated), hstpf_can_est_theta_c0_decode(m.c0),
+           hstpf_can_est_theta_c1_decode(m.c1), hstpf_can_est_theta_c2_decode(m.c2));
+}
+
+static void health_rx(double ps, double ts, double crc, double rep, double jump, double len)
+{
+    struct hstpf_can_health_rx_t m;
+    uint8_t f[8];
+    hstpf_can_health_rx_init(&m);
+    m.pos_stale = hstpf_frames_health_rx_pos_stale_raw(ps);
+    m.tract_stale = hstpf_frames_health_rx_tract_stale_raw(ts);
+    m.bad_crc = hstpf_frames_health_rx_bad_crc_raw(crc);
+    m.counter_repeat = hstpf_frames_health_rx_counter_repeat_raw(rep);
+    m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(jump);
+    m.wrong_length = hstpf_frames_health_rx_wrong_length_raw(len);
+    hstpf_can_health_rx_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_RX_ID), f, 8);
+    hstpf_can_health_rx_unpack(&m, f, 8);
+    head("HealthRx", HSTPF_FRAME_HEALTH_RX_ID, f);
+    printf("\"in\":{\"PosStale\":%.17g,\"TractStale\":%.17g,\"BadCrc\":%.17g,\"CounterRepeat\":%.17g,"
+           "\"CounterJump\":%.17g,\"WrongLength\":%.17g},",
+           ps, ts, crc, rep, jump, len);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosStale\":%u,\"TractStale\":%u,\"BadCrc\":%u,"
+           "\"CounterRepeat\":%u,\"CounterJump\":%u,\"WrongLength\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.bad_crc, m.counter_repeat, m.counter_jump,
+           m.wrong_length);
+}
+
+static void health_sys(double stale, double unk, double err, double deg)
+{
+    struct hstpf_can_health_sys_t m;
+    uint8_t f[8];
+    hstpf_can_health_sys_init(&m);
+    m.stale_events = hstpf_frames_health_sys_stale_events_raw(stale);
+    m.unknown_id = hstpf_frames_health_sys_unknown_id_raw(unk);
+    m.error_frames = hstpf_frames_health_sys_error_frames_raw(err);
+    m.degeneracy = hstpf_frames_health_sys_degeneracy_raw(deg);
+    hstpf_can_health_sys_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_SYS_ID), f, 8);
+    hstpf_can_health_sys_unpack(&m, f, 8);
+    head("HealthSys", HSTPF_FRAME_HEALTH_SYS_ID, f);
+    printf("\"in\":{\"StaleEvents\":%.17g,\"UnknownId\":%.17g,\"ErrorFrames\":%.17g,\"Degeneracy\":%.17g},", stale,
+           unk, err, deg);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"StaleEvents\":%u,\"UnknownId\":%u,\"ErrorFrames\":%u,"
+           "\"Degeneracy\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
+}
+
+static void encode_set(void)
+{
+    size_t i;
+    int k;
+    for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
+        hstpf_e2e_tx_init(&tx[i], hstpf_frames[i].data_id);
+    }
+    /* 17 position frames: the counter wraps 14 -> 0 on the way. */
+    for (k = 0; k < 17; k++) {
+        position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k);
+    }
+    position(1, 3, 4294967.295); /* the largest position */
+    traction(1, 0.0);
+    traction(1, 187.33);
+    traction(1, -412.07);
+    traction(0, -83886.08);
+    traction(1, 83886.07);
+    est_state(0, 0.0, 0.0);
+    est_state(1, 1234.567, 97.22);
+    est_state(1, 350123.456, -0.37);
+    est_state(1, 42.0, -327.68);
+    est_type(0, 255, 0.0, 2, 0.4711);
+    est_type(1, 2, 0.9532, 2, 0.9532);
+    est_type(2, 6, 1.0, 6, 1.0);
+    est_theta(1, 0, 0.79, 0.0064, 0.000115);
+    est_theta(1, 0, 2.25, 0.019, 0.00032);
+    est_theta(1, 1, 65.535, 0.065535, 0.0013107);
+    health_rx(0, 0, 0, 0, 0, 0);
+    health_rx(1, 0, 17, 3, 4095, 1);
+    health_sys(2, 0, 41, 4095);
+    health_sys(0, 1, 0, 0);
+}
+
+/* ---- decode side ---------------------------------------------------------- */
+
+static hstpf_e2e_rx_t rx[HSTPF_FRAMES_COUNT];
+
+static int decode_line(const char *line, uint32_t now_ms)
+{
+    char *end;
+    unsigned long id = strtoul(line, &end, 16);
+    uint8_t f[64];
+    size_t n = 0;
+    const hstpf_frame_info_t *fi = hstpf_frame_find((uint32_t)id);
+    const char *p = end;
+    hstpf_e2e_result_t r;
+
+    while (*p == ' ') {
+        p++;
+    }
+    while (p[0] != '\0' && p[1] != '\0' && p[0] != '\n' && n < sizeof f) {
+        char b[3] = {p[0], p[1], 0};
+        f[n++] = (uint8_t)strtoul(b, NULL, 16);
+        p += 2;
+    }
+    if (fi == NULL) {
+        printf("{\"id\":%lu,\"unknown\":true}\n", id);
+        return 0;
+    }
+    r = hstpf_e2e_rx_check(&rx[fi - hstpf_frames], f, n, now_ms);
+    printf("{\"msg\":\"%s\",\"id\":%lu,\"e2e\":\"%s\",\"out\":{", fi->name, id, hstpf_e2e_result_name(r));
+    if (n != 8) {
+        printf("}}\n");
+        return 0;
+    }
+    switch (fi->can_id) {
+    case HSTPF_FRAME_POSITION_ID: {
+        struct hstpf_can_position_t m;
+        hstpf_can_position_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%u,\"PosQuality\":%u,\"Position\":%.17g", m.e2e_crc,
+               m.e2e_counter, m.pos_valid, m.pos_quality, hstpf_can_position_position_decode(m.position));
+        break;
+    }
+    case HSTPF_FRAME_TRACTION_ID: {
+        struct hstpf_can_traction_t m;
+        hstpf_can_traction_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TractValid\":%u,\"TractForce\":%.17g", m.e2e_crc, m.e2e_counter,
+               m.tract_valid, hstpf_can_traction_tract_force_decode(m.tract_force));
+        break;
+    }
+    case HSTPF_FRAME_EST_STATE_ID: {
+        struct hstpf_can_est_state_t m;
+        hstpf_can_est_state_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%u,\"EstPosition\":%.17g,\"EstSpeed\":%.17g", m.e2e_crc,
+               m.e2e_counter, m.est_valid, hstpf_can_est_state_est_position_decode(m.est_position),
+               hstpf_can_est_state_est_speed_decode(m.est_speed));
+        break;
+    }
+    case HSTPF_FRAME_EST_TYPE_ID: {
+        struct hstpf_can_est_type_t m;
+        hstpf_can_est_type_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%u,\"DeclaredType\":%u,\"DeclaredWeight\":%.17g,"
+               "\"LeaderType\":%u,\"LeaderWeight\":%.17g",
+               m.e2e_crc, m.e2e_counter, m.type_status, m.declared_type,
+               hstpf_can_est_type_declared_weight_decode(m.declared_weight), m.leader_type,
+               hstpf_can_est_type_leader_weight_decode(m.leader_weight));
+        break;
+    }
+    case HSTPF_FRAME_EST_THETA_ID: {
+        struct hstpf_can_est_theta_t m;
+        hstpf_can_est_theta_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"ThetaValid\":%u,\"ThetaSaturated\":%u,\"C0\":%.17g,\"C1\":%.17g,"
+               "\"C2\":%.17g",
+               m.e2e_crc, m.e2e_counter, m.theta_valid, m.theta_saturated, hstpf_can_est_theta_c0_decode(m.c0),
+               hstpf_can_est_theta_c1_decode(m.c1), hstpf_can_est_theta_c2_decode(m.c2));
+        break;
+    }
+    case HSTPF_FRAME_HEALTH_RX_ID: {
+        struct hstpf_can_health_rx_t m;
+        hstpf_can_health_rx_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosStale\":%u,\"TractStale\":%u,\"BadCrc\":%u,\"CounterRepeat\":%u,"
+               "\"CounterJump\":%u,\"WrongLength\":%u",
+               m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.bad_crc, m.counter_repeat, m.counter_jump,
+               m.wrong_length);
+        break;
+    }
+    default: {
+        struct hstpf_can_health_sys_t m;
+        hstpf_can_health_sys_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"StaleEvents\":%u,\"UnknownId\":%u,\"ErrorFrames\":%u,"
+               "\"Degeneracy\":%u",
+               m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
+        break;
+    }
+    }
+    printf("}}\n");
+    return 0;
+}
+
+static int decode_stdin(void)
+{
+    char line[512];
+    size_t i;
+    uint32_t t = 0;
+    for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
+        hstpf_e2e_rx_config_t c;
+        hstpf_e2e_rx_config_default(&c, hstpf_frames[i].data_id, hstpf_frames[i].length);
+        c.timeout_ms = 0x7FFFFFFFu; /* no clock in this program: never stale */
+        hstpf_e2e_rx_init(&rx[i], &c);
+    }
+    while (fgets(line, sizeof line, stdin) != NULL) {
+        if (line[0] != '\n' && line[0] != '\0') {
+            decode_line(line, t);
+            t += 10u;
+        }
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1 && strcmp(argv[1], "decode") == 0) {
+        return decode_stdin();
+    }
+    encode_set();
+    return 0;
+}
