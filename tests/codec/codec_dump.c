@@ -200,7 +200,9 @@ static void encode_set(void)
     for (k = 0; k < 17; k++) {
         position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k);
     }
-    position(1, 3, 4294967.295); /* the largest position */
+    position(1, 3, -2.718);      /* a noisy fix near the origin */
+    position(1, 3, 100000000.0); /* the largest position */
+    position(1, 3, -100000000.0);
     traction(1, 0.0);
     traction(1, 187.33);
     traction(1, -412.07);
@@ -209,7 +211,8 @@ static void encode_set(void)
     est_state(0, 0.0, 0.0);
     est_state(1, 1234.567, 97.22);
     est_state(1, 350123.456, -0.37);
-    est_state(1, 42.0, -327.68);
+    est_state(1, -42.0, -327.68);
+    est_state(1, 21474836.47, 327.67);
     est_type(0, 255, 0.0, 2, 0.4711);
     est_type(1, 2, 0.9532, 2, 0.9532);
     est_type(2, 6, 1.0, 6, 1.0);

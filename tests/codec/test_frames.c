@@ -39,12 +39,16 @@ static void test_raw_saturation_and_rounding(void **state)
     double nan = 0.0;
     (void)state;
     nan = nan / nan;
-    /* Position, 1 mm, [0, 4294967.295] m. */
-    assert_int_equal(hstpf_frames_position_position_raw(1234.5674), 1234567u);
-    assert_int_equal(hstpf_frames_position_position_raw(1234.5676), 1234568u);
-    assert_int_equal(hstpf_frames_position_position_raw(-3.0), 0u);
-    assert_int_equal(hstpf_frames_position_position_raw(1e12), 4294967295u);
-    assert_int_equal(hstpf_frames_position_position_raw(nan), 0u);
+    /* Position, signed 40 bit, 1 mm, [-1e8, 1e8] m. */
+    assert_true(hstpf_frames_position_position_raw(1234.5674) == 1234567);
+    assert_true(hstpf_frames_position_position_raw(1234.5676) == 1234568);
+    assert_true(hstpf_frames_position_position_raw(-3.0016) == -3002);
+    assert_true(hstpf_frames_position_position_raw(1e12) == INT64_C(100000000000));
+    assert_true(hstpf_frames_position_position_raw(-1e12) == -INT64_C(100000000000));
+    assert_true(hstpf_frames_position_position_raw(nan) == 0);
+    /* Estimated position, signed 32 bit, 1 cm. */
+    assert_int_equal(hstpf_frames_est_state_est_position_raw(350123.456), 35012346);
+    assert_int_equal(hstpf_frames_est_state_est_position_raw(-1e9), INT32_MIN);
     /* Traction force, signed 24 bit, 0.01 kN. */
     assert_int_equal(hstpf_frames_traction_tract_force_raw(-123.456), -12346);
     assert_int_equal(hstpf_frames_traction_tract_force_raw(123.454), 12345);

@@ -58,6 +58,14 @@ static inline uint8_t pack_left_shift_u32(
     return (uint8_t)((uint8_t)(value << shift) & mask);
 }
 
+static inline uint8_t pack_left_shift_u64(
+    uint64_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value << shift) & mask);
+}
+
 static inline uint8_t pack_right_shift_u16(
     uint16_t value,
     uint8_t shift,
@@ -68,6 +76,14 @@ static inline uint8_t pack_right_shift_u16(
 
 static inline uint8_t pack_right_shift_u32(
     uint32_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint8_t)((uint8_t)(value >> shift) & mask);
+}
+
+static inline uint8_t pack_right_shift_u64(
+    uint64_t value,
     uint8_t shift,
     uint8_t mask)
 {
@@ -88,6 +104,14 @@ static inline uint32_t unpack_left_shift_u32(
     uint8_t mask)
 {
     return (uint32_t)((uint32_t)(value & mask) << shift);
+}
+
+static inline uint64_t unpack_left_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) << shift);
 }
 
 static inline uint8_t unpack_right_shift_u8(
@@ -114,6 +138,14 @@ static inline uint32_t unpack_right_shift_u32(
     return (uint32_t)((uint32_t)(value & mask) >> shift);
 }
 
+static inline uint64_t unpack_right_shift_u64(
+    uint8_t value,
+    uint8_t shift,
+    uint8_t mask)
+{
+    return (uint64_t)((uint64_t)(value & mask) >> shift);
+}
+
 static uint64_t cantools_unsigned_from_double(double value)
 {
     if (value < 0) {
@@ -128,6 +160,8 @@ int hstpf_can_position_pack(
     const struct hstpf_can_position_t *src_p,
     size_t size)
 {
+    uint64_t position;
+
     if (size < 8u) {
         return (-EINVAL);
     }
@@ -138,10 +172,12 @@ int hstpf_can_position_pack(
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->pos_valid, 4u, 0x10u);
     dst_p[1] |= pack_left_shift_u8(src_p->pos_quality, 5u, 0xe0u);
-    dst_p[2] |= pack_left_shift_u32(src_p->position, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u32(src_p->position, 8u, 0xffu);
-    dst_p[4] |= pack_right_shift_u32(src_p->position, 16u, 0xffu);
-    dst_p[5] |= pack_right_shift_u32(src_p->position, 24u, 0xffu);
+    position = (uint64_t)src_p->position;
+    dst_p[2] |= pack_left_shift_u64(position, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u64(position, 8u, 0xffu);
+    dst_p[4] |= pack_right_shift_u64(position, 16u, 0xffu);
+    dst_p[5] |= pack_right_shift_u64(position, 24u, 0xffu);
+    dst_p[6] |= pack_right_shift_u64(position, 32u, 0xffu);
 
     return (8);
 }
@@ -151,6 +187,8 @@ int hstpf_can_position_unpack(
     const uint8_t *src_p,
     size_t size)
 {
+    uint64_t position;
+
     if (size < 8u) {
         return (-EINVAL);
     }
@@ -159,10 +197,17 @@ int hstpf_can_position_unpack(
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->pos_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
     dst_p->pos_quality = unpack_right_shift_u8(src_p[1], 5u, 0xe0u);
-    dst_p->position = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
-    dst_p->position |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
-    dst_p->position |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
-    dst_p->position |= unpack_left_shift_u32(src_p[5], 24u, 0xffu);
+    position = unpack_right_shift_u64(src_p[2], 0u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[3], 8u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[4], 16u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[5], 24u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[6], 32u, 0xffu);
+
+    if ((position & (1ull << 39)) != 0ull) {
+        position |= 0xffffff0000000000ull;
+    }
+
+    dst_p->position = (int64_t)position;
 
     return (0);
 }
@@ -258,26 +303,24 @@ bool hstpf_can_position_pos_quality_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 7.0));
 }
 
-uint32_t hstpf_can_position_position_encode(double value)
+int64_t hstpf_can_position_position_encode(double value)
 {
-    return (uint32_t)(cantools_unsigned_from_double(round(value / 0.001)));
+    return (int64_t)(round(value / 0.001));
 }
 
-double hstpf_can_position_position_decode(uint32_t value)
+double hstpf_can_position_position_decode(int64_t value)
 {
     return ((double)value * 0.001);
 }
 
-bool hstpf_can_position_position_is_in_range(uint32_t value)
+bool hstpf_can_position_position_is_in_range(int64_t value)
 {
-    (void)value;
-
-    return (true);
+    return ((value >= -100000000000ll) && (value <= 100000000000ll));
 }
 
 bool hstpf_can_position_position_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4294967.295));
+    return ((value >= -100000000.0) && (value <= 100000000.0));
 }
 
 int hstpf_can_traction_pack(
@@ -428,6 +471,7 @@ int hstpf_can_est_state_pack(
     size_t size)
 {
     uint16_t est_speed;
+    uint32_t est_position;
 
     if (size < 8u) {
         return (-EINVAL);
@@ -438,10 +482,11 @@ int hstpf_can_est_state_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->est_valid, 4u, 0x10u);
-    dst_p[2] |= pack_left_shift_u32(src_p->est_position, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u32(src_p->est_position, 8u, 0xffu);
-    dst_p[4] |= pack_right_shift_u32(src_p->est_position, 16u, 0xffu);
-    dst_p[5] |= pack_right_shift_u32(src_p->est_position, 24u, 0xffu);
+    est_position = (uint32_t)src_p->est_position;
+    dst_p[2] |= pack_left_shift_u32(est_position, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(est_position, 8u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(est_position, 16u, 0xffu);
+    dst_p[5] |= pack_right_shift_u32(est_position, 24u, 0xffu);
     est_speed = (uint16_t)src_p->est_speed;
     dst_p[6] |= pack_left_shift_u16(est_speed, 0u, 0xffu);
     dst_p[7] |= pack_right_shift_u16(est_speed, 8u, 0xffu);
@@ -455,6 +500,7 @@ int hstpf_can_est_state_unpack(
     size_t size)
 {
     uint16_t est_speed;
+    uint32_t est_position;
 
     if (size < 8u) {
         return (-EINVAL);
@@ -463,10 +509,11 @@ int hstpf_can_est_state_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->est_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
-    dst_p->est_position = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
-    dst_p->est_position |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
-    dst_p->est_position |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
-    dst_p->est_position |= unpack_left_shift_u32(src_p[5], 24u, 0xffu);
+    est_position = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
+    est_position |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
+    est_position |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
+    est_position |= unpack_left_shift_u32(src_p[5], 24u, 0xffu);
+    dst_p->est_position = (int32_t)est_position;
     est_speed = unpack_right_shift_u16(src_p[6], 0u, 0xffu);
     est_speed |= unpack_left_shift_u16(src_p[7], 8u, 0xffu);
     dst_p->est_speed = (int16_t)est_speed;
@@ -545,17 +592,17 @@ bool hstpf_can_est_state_est_valid_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 1.0));
 }
 
-uint32_t hstpf_can_est_state_est_position_encode(double value)
+int32_t hstpf_can_est_state_est_position_encode(double value)
 {
-    return (uint32_t)(cantools_unsigned_from_double(round(value / 0.001)));
+    return (int32_t)(round(value / 0.01));
 }
 
-double hstpf_can_est_state_est_position_decode(uint32_t value)
+double hstpf_can_est_state_est_position_decode(int32_t value)
 {
-    return ((double)value * 0.001);
+    return ((double)value * 0.01);
 }
 
-bool hstpf_can_est_state_est_position_is_in_range(uint32_t value)
+bool hstpf_can_est_state_est_position_is_in_range(int32_t value)
 {
     (void)value;
 
@@ -564,7 +611,7 @@ bool hstpf_can_est_state_est_position_is_in_range(uint32_t value)
 
 bool hstpf_can_est_state_est_position_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4294967.295));
+    return ((value >= -21474836.48) && (value <= 21474836.47));
 }
 
 int16_t hstpf_can_est_state_est_speed_encode(double value)

@@ -240,13 +240,13 @@ struct hstpf_can_position_t {
     uint8_t pos_quality;
 
     /**
-     * Distance travelled along the run from its origin, 1 mm resolution.
+     * Distance along the run from its origin, signed (a noisy fix near the origin can be negative), 1 mm; range as the library accepts (1e8 m).
      *
-     * Range: 0..4294967295 (0..4294967.295 m)
+     * Range: -100000000000..100000000000 (-100000000..100000000 m)
      * Scale: 0.001
      * Offset: 0
      */
-    uint32_t position;
+    int64_t position;
 };
 
 /**
@@ -322,13 +322,13 @@ struct hstpf_can_est_state_t {
     uint8_t est_valid;
 
     /**
-     * Estimated position, same origin as Position.
+     * Estimated position, same origin as Position, 1 cm (+-21474 km).
      *
-     * Range: 0..4294967295 (0..4294967.295 m)
-     * Scale: 0.001
+     * Range: -2147483648..2147483647 (-21474836.48..21474836.47 m)
+     * Scale: 0.01
      * Offset: 0
      */
-    uint32_t est_position;
+    int32_t est_position;
 
     /**
      * Estimated speed.
@@ -816,7 +816,7 @@ bool hstpf_can_position_pos_quality_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
-uint32_t hstpf_can_position_position_encode(double value);
+int64_t hstpf_can_position_position_encode(double value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -825,7 +825,7 @@ uint32_t hstpf_can_position_position_encode(double value);
  *
  * @return Decoded signal.
  */
-double hstpf_can_position_position_decode(uint32_t value);
+double hstpf_can_position_position_decode(int64_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -834,7 +834,7 @@ double hstpf_can_position_position_decode(uint32_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_position_position_is_in_range(uint32_t value);
+bool hstpf_can_position_position_is_in_range(int64_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1210,7 +1210,7 @@ bool hstpf_can_est_state_est_valid_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
-uint32_t hstpf_can_est_state_est_position_encode(double value);
+int32_t hstpf_can_est_state_est_position_encode(double value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1219,7 +1219,7 @@ uint32_t hstpf_can_est_state_est_position_encode(double value);
  *
  * @return Decoded signal.
  */
-double hstpf_can_est_state_est_position_decode(uint32_t value);
+double hstpf_can_est_state_est_position_decode(int32_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1228,7 +1228,7 @@ double hstpf_can_est_state_est_position_decode(uint32_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_est_state_est_position_is_in_range(uint32_t value);
+bool hstpf_can_est_state_est_position_is_in_range(int32_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.

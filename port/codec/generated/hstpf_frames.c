@@ -52,9 +52,9 @@ uint8_t hstpf_frames_position_pos_quality_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 7.0);
 }
 
-uint32_t hstpf_frames_position_position_raw(double phys)
+int64_t hstpf_frames_position_position_raw(double phys)
 {
-    return (uint32_t)raw_sat(phys, 0.001, 0.0, 0.0, 4294967295.0);
+    return (int64_t)raw_sat(phys, 0.001, 0.0, -100000000000.0, 100000000000.0);
 }
 
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys)
@@ -72,9 +72,9 @@ uint8_t hstpf_frames_est_state_est_valid_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
-uint32_t hstpf_frames_est_state_est_position_raw(double phys)
+int32_t hstpf_frames_est_state_est_position_raw(double phys)
 {
-    return (uint32_t)raw_sat(phys, 0.001, 0.0, 0.0, 4294967295.0);
+    return (int32_t)raw_sat(phys, 0.01, 0.0, -2147483648.0, 2147483647.0);
 }
 
 int16_t hstpf_frames_est_state_est_speed_raw(double phys)

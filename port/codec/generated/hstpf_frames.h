@@ -78,16 +78,16 @@ const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);
 uint8_t hstpf_frames_position_pos_valid_raw(double phys);
 /** Position.PosQuality: scale 1, [0, 7]. */
 uint8_t hstpf_frames_position_pos_quality_raw(double phys);
-/** Position.Position: scale 0.001, [0, 4.29497e+06] m. */
-uint32_t hstpf_frames_position_position_raw(double phys);
+/** Position.Position: scale 0.001, [-1e+08, 1e+08] m. */
+int64_t hstpf_frames_position_position_raw(double phys);
 /** Traction.TractValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys);
 /** Traction.TractForce: scale 0.01, [-83886.1, 83886.1] kN. */
 int32_t hstpf_frames_traction_tract_force_raw(double phys);
 /** EstState.EstValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_est_state_est_valid_raw(double phys);
-/** EstState.EstPosition: scale 0.001, [0, 4.29497e+06] m. */
-uint32_t hstpf_frames_est_state_est_position_raw(double phys);
+/** EstState.EstPosition: scale 0.01, [-2.14748e+07, 2.14748e+07] m. */
+int32_t hstpf_frames_est_state_est_position_raw(double phys);
 /** EstState.EstSpeed: scale 0.01, [-327.68, 327.67] m/s. */
 int16_t hstpf_frames_est_state_est_speed_raw(double phys);
 /** EstType.TypeStatus: scale 1, [0, 2]. */
