@@ -16,8 +16,9 @@ seeds=${HSTPF_SEEDS:-100}
 for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-known; do
   echo "== $s"
   trace=()
-  case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; esac
-  "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
+  n=$seeds
+  case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; hilly-*) n=$(( seeds < 30 ? seeds : 30 )) ;; esac
+  "$mc" --scenario "$s" --seeds "$n" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
 done
 echo "== Case 2 ablation"
 {

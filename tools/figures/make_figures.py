@@ -89,7 +89,9 @@ def decision_figure(jsons, outdir):
         if t:
             data.append(t)
             labels.append("%s\n(n=%d)" % (d["scenario"], len(t)))
-    ax.boxplot(data, labels=labels, showfliers=True)
+    ax.boxplot(data, showfliers=True)
+    ax.set_xticks(range(1, len(labels) + 1))
+    ax.set_xticklabels(labels)
     ax.set(ylabel="decision time [s] (true type declared)",
            title="Monte Carlo decision times (Table 2 rule), M = 100")
     ax.grid(alpha=0.3)
