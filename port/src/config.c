@@ -21,7 +21,8 @@ typedef enum {
     K_PRESET,
     K_TRACTION,
     K_STALE,
-    K_FORMAT
+    K_FORMAT,
+    K_RXFILTER
 } ktype_t;
 
 typedef struct {
@@ -70,11 +71,13 @@ static const key_t_ keys[] = {
     {"max_gap_s", K_DBL, OFF(sched.max_gap_s), 0, 1e7, 1,
      "a gap between steps longer than this restarts the estimator, s"},
     {"traction_mode", K_TRACTION, 0, 0, 0, 0, "traction of a step: mean (time-weighted over the step) | latest"},
-    {"e2e_max_delta", K_U32, OFF(e2e_max_delta), 1, 14, 0,
+    {"e2e_max_delta", K_U32, OFF(e2e_max_delta), 1, 13, 0,
      "largest accepted alive-counter increment (1 = no frame may be lost)"},
     {"time_scale", K_DBL, OFF(time_scale), 0, 1e4, 1,
      "frame time = first stamp + (stamp - first stamp) x time_scale (a log replayed k x faster: k)"},
     {"tick_s", K_DBL, OFF(tick_s), 0, 60, 1, "idle tick: with no frame for this long, time advances by it, s"},
+    {"rx_filter", K_RXFILTER, 0, 0, 0, 0,
+     "kernel receive filter: inputs (the two input IDs) | block (0x100-0x1FF) | all"},
     {"send", K_BOOL, OFF(send), 0, 0, 0, "with iface: send the estimate frames (0 = listen only)"},
     {"reopen_s", K_DBL, OFF(reopen_s), 0, 3600, 1, "retry period to reopen a lost interface, s (wall clock)"},
     {"out", K_PATH, OFF(out), 0, 0, 0, "per-step stream file (- = stdout, empty = none)"},
@@ -170,14 +173,15 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->declare_hold_s = fc.declare_hold_s;
     c->gate_m = fc.gate_m;
     c->mass_t = 500.0;
-    c->sched.step_period_s = 0.0;
-    c->sched.pos_timeout_s = 3.0;
-    c->sched.trac_timeout_s = 3.0;
+    c->sched.step_period_s = 1.0;
+    c->sched.pos_timeout_s = 0.5;
+    c->sched.trac_timeout_s = 0.5;
     c->sched.predict_period_s = 1.0;
     c->sched.max_gap_s = 600.0;
     c->sched.traction_mode = HSTPFD_TRACTION_MEAN;
     c->sched.stale_policy = HSTPFD_STALE_PREDICT;
-    c->e2e_max_delta = 2;
+    c->e2e_max_delta = 3;
+    c->rx_filter = HSTPFD_RX_FILTER_BLOCK;
     c->time_scale = 1.0;
     c->tick_s = 0.1;
     c->send = 1;
@@ -524,6 +528,18 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
         }
         c->sched.stale_policy = sel == 0 ? HSTPFD_STALE_PREDICT : HSTPFD_STALE_WAIT;
         return 0;
+    case K_RXFILTER:
+        if (strcmp(v, "inputs") == 0) {
+            c->rx_filter = HSTPFD_RX_FILTER_INPUTS;
+        } else if (strcmp(v, "block") == 0) {
+            c->rx_filter = HSTPFD_RX_FILTER_BLOCK;
+        } else if (strcmp(v, "all") == 0) {
+            c->rx_filter = HSTPFD_RX_FILTER_ALL;
+        } else {
+            fail(err, err_size, "rx_filter: '%s' must be inputs, block or all", v);
+            return -1;
+        }
+        return 0;
     case K_FORMAT:
         sel = choose(v, "jsonl", "csv");
         if (sel < 0) {
@@ -746,6 +762,12 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
             break;
         case K_FORMAT:
             PUT("%s = %s\n", k->name, c->out_format == HSTPFD_OUT_JSONL ? "jsonl" : "csv");
+            break;
+        case K_RXFILTER:
+            PUT("%s = %s\n", k->name,
+                c->rx_filter == HSTPFD_RX_FILTER_INPUTS ? "inputs"
+                : c->rx_filter == HSTPFD_RX_FILTER_BLOCK ? "block"
+                                                          : "all");
             break;
         }
     }

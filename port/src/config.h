@@ -17,6 +17,11 @@
 #define HSTPFD_ERR_MAX 256
 
 typedef enum { HSTPFD_OUT_JSONL = 0, HSTPFD_OUT_CSV = 1 } hstpfd_out_format_t;
+typedef enum {
+    HSTPFD_RX_FILTER_INPUTS = 0, /* kernel passes only the input IDs */
+    HSTPFD_RX_FILTER_BLOCK = 1,  /* the input block 0x100-0x1FF (unknown IDs there are counted) */
+    HSTPFD_RX_FILTER_ALL = 2     /* everything */
+} hstpfd_rx_filter_t;
 
 typedef struct {
     /* source: exactly one of iface / log */
@@ -41,6 +46,7 @@ typedef struct {
     double time_scale;
     double tick_s;
     /* bus */
+    hstpfd_rx_filter_t rx_filter;
     uint8_t send;
     double reopen_s;
     /* outputs */

@@ -57,7 +57,7 @@ static void test_set_numbers(void **state)
     assert_int_equal(hstpfd_config_set(&cfg, "step_period_s", "0", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "2.5", err, sizeof err), 0);
     assert_float_equal(cfg.sched.pos_timeout_s, 2.5, 0.0);
-    assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "15", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "14", err, sizeof err), -1);
     assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "1", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "send", "no", err, sizeof err), 0);
     assert_int_equal(cfg.send, 0);
@@ -78,6 +78,11 @@ static void test_enums(void **state)
     assert_int_equal(hstpfd_config_set(&cfg, "out_format", "csv", err, sizeof err), 0);
     assert_int_equal(cfg.out_format, HSTPFD_OUT_CSV);
     assert_int_equal(hstpfd_config_set(&cfg, "out_format", "xml", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "rx_filter", "all", err, sizeof err), 0);
+    assert_int_equal(cfg.rx_filter, HSTPFD_RX_FILTER_ALL);
+    assert_int_equal(hstpfd_config_set(&cfg, "rx_filter", "inputs", err, sizeof err), 0);
+    assert_int_equal(cfg.rx_filter, HSTPFD_RX_FILTER_INPUTS);
+    assert_int_equal(hstpfd_config_set(&cfg, "rx_filter", "some", err, sizeof err), -1);
     assert_int_equal(hstpfd_config_set(&cfg, "noise", "case2", err, sizeof err), 0);
     assert_int_equal(cfg.noise_v.kind, HSTPF_DIST_GAMMA);
     assert_float_equal(cfg.noise_v.shape, 0.1, 0.0);

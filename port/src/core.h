@@ -1,0 +1,86 @@
+/* hstpfd: the daemon's logic between a frame source and the estimator.
+ * Frames in (from a bus or a log, in time order), estimator steps, output
+ * frames, the per-step stream and the summary out. Time comes only from the
+ * frames' timestamps (and idle ticks on the same clock). Portable C99
+ * (stdio for the output streams), no heap. */
+#ifndef HSTPFD_CORE_H
+#define HSTPFD_CORE_H
+
+#include <stdio.h>
+
+#include "config.h"
+#include "frame.h"
+#include "frames.h"
+#include "sched.h"
+
+/* Sends one frame; returns 0, or < 0 if it was not sent (counted). */
+typedef int (*hstpfd_send_fn)(void *ctx, const hstpfd_frame_t *f);
+
+typedef struct {
+    uint32_t frames, ticks;
+    uint32_t position, traction, output, unknown, error, format;
+    uint32_t pos_invalid, trac_invalid, trac_range;
+    uint32_t err_class[HSTPFD_ERR_N_CLASSES];
+    uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
+    uint32_t degeneracy;
+    uint32_t tx_frames, tx_errors, tx_skipped;
+    /* filled by the I/O layer */
+    uint32_t reopens, bad_lines, read_errors;
+} hstpfd_counts_t;
+
+typedef struct {
+    const hstpfd_config_t *cfg;
+    hstpf_t *filt;
+    hstpfd_sched_t sched;
+    hstpfd_rx_state_t rx;
+    hstpfd_tx_state_t tx;
+    hstpfd_send_fn send;
+    void *send_ctx;
+    FILE *out;        /* per-step stream, or NULL */
+    FILE *frames_out; /* candump log of the output frames, or NULL */
+    char bus[HSTPFD_NAME_MAX];
+    int row[HSTPF_MAX_MODELS]; /* Table 1 row of each model, -2 custom */
+    /* time, microseconds; frame time = src0 + (source stamp - src0) x time_scale */
+    uint8_t have_time;
+    int64_t src0, t_first, t_now, last_src, tick_us;
+    int64_t next_tx[HSTPFD_N_OUTPUTS];
+    uint8_t state_sent;
+    int64_t last_state_tx;
+    /* estimate */
+    hstpf_estimate_t est;
+    uint8_t have_fix;      /* the estimator has a fix now */
+    uint8_t had_fix;       /* t_first_fix is set */
+    uint8_t have_decision; /* decision_t is set */
+    int64_t t_first_fix;
+    int16_t declared_prev;
+    int64_t decision_t;    /* frame time of the step that declared the current type */
+    uint32_t floor_prev[HSTPF_MAX_MODELS];
+    hstpfd_counts_t n;
+} hstpfd_core_t;
+
+/* Initialises the core and the estimator *filt (caller-owned, static).
+ * send may be NULL (no bus); out and frames_out may be NULL. bus names the
+ * interface in frames_out lines. Returns 0, or an HSTPF_E_* code from
+ * hstpf_init, or -100 for a receiver configuration error. */
+int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt, hstpfd_send_fn send,
+                     void *send_ctx, FILE *out, FILE *frames_out, const char *bus);
+
+/* One received frame (t_us: the source's timestamp). */
+void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f);
+
+/* No frame has arrived up to the source time t_us: idle ticks up to it. */
+void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us);
+
+/* Microseconds of source time until the next idle tick is due (for a poll
+ * timeout), or -1 before the first frame. */
+int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us);
+
+/* Writes the summary as one JSON line (with newline). source_kind is "log"
+ * or "iface", source the file or interface, end why the run ended. */
+void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_kind, const char *source,
+                         const char *end);
+
+/* Short name of an hstpf error code ("E_OUTLIER"). */
+const char *hstpfd_err_name(int32_t code);
+
+#endif

@@ -1,0 +1,195 @@
+/* hstpfd: the frame seam filled with port/codec (cantools pack/unpack from
+ * port/dbc/hstpf.dbc, hstpf_e2e for CRC and alive counter). */
+#include "frames.h"
+
+#include <string.h>
+
+#include "hstpf_can.h"
+#include "hstpf_frames.h"
+
+int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms)
+{
+    hstpf_e2e_rx_config_t c;
+    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_POSITION_DATA_ID, HSTPF_FRAME_POSITION_LENGTH);
+    c.max_delta = max_delta;
+    c.timeout_ms = pos_timeout_ms;
+    if (hstpf_e2e_rx_init(&st->pos, &c) != 0) {
+        return -1;
+    }
+    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_TRACTION_DATA_ID, HSTPF_FRAME_TRACTION_LENGTH);
+    c.max_delta = max_delta;
+    c.timeout_ms = trac_timeout_ms;
+    return hstpf_e2e_rx_init(&st->trac, &c) == 0 ? 0 : -1;
+}
+
+uint32_t hstpfd_input_id(unsigned i)
+{
+    return i == 0 ? HSTPF_FRAME_POSITION_ID : HSTPF_FRAME_TRACTION_ID;
+}
+
+void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t now_ms, hstpfd_rx_t *out)
+{
+    const hstpf_frame_info_t *info;
+    memset(out, 0, sizeof *out);
+    out->e2e = HSTPF_E2E_NO_DATA;
+    if (f->flags & HSTPFD_FRAME_ERR) {
+        out->kind = HSTPFD_RX_ERROR;
+        return;
+    }
+    info = (f->flags & HSTPFD_FRAME_EXT) ? NULL : hstpf_frame_find(f->id);
+    if (info == NULL) {
+        /* an extended ID equal to one of ours is still somebody else's */
+        out->kind = HSTPFD_RX_UNKNOWN;
+        return;
+    }
+    if (f->flags & (HSTPFD_FRAME_RTR | HSTPFD_FRAME_FD)) {
+        out->kind = HSTPFD_RX_FORMAT;
+        return;
+    }
+    if (f->id == HSTPF_FRAME_POSITION_ID) {
+        struct hstpf_can_position_t m;
+        out->kind = HSTPFD_RX_POSITION;
+        out->e2e = hstpf_e2e_rx_check(&st->pos, f->data, f->len, now_ms);
+        out->accepted = (uint8_t)(hstpf_e2e_accepted(out->e2e) != 0);
+        if (out->accepted && hstpf_can_position_unpack(&m, f->data, f->len) == 0) {
+            out->value = hstpf_can_position_position_decode(m.position);
+            out->valid = (uint8_t)(m.pos_valid == HSTPF_CAN_POSITION_POS_VALID_VALID_CHOICE);
+        }
+        return;
+    }
+    if (f->id == HSTPF_FRAME_TRACTION_ID) {
+        struct hstpf_can_traction_t m;
+        out->kind = HSTPFD_RX_TRACTION;
+        out->e2e = hstpf_e2e_rx_check(&st->trac, f->data, f->len, now_ms);
+        out->accepted = (uint8_t)(hstpf_e2e_accepted(out->e2e) != 0);
+        if (out->accepted && hstpf_can_traction_unpack(&m, f->data, f->len) == 0) {
+            out->value = hstpf_can_traction_tract_force_decode(m.tract_force);
+            out->valid = (uint8_t)(m.tract_valid == HSTPF_CAN_TRACTION_TRACT_VALID_VALID_CHOICE);
+        }
+        return;
+    }
+    out->kind = HSTPFD_RX_OUTPUT;
+}
+
+void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
+{
+    (void)hstpf_e2e_rx_poll(&st->pos, now_ms);
+    (void)hstpf_e2e_rx_poll(&st->trac, now_ms);
+}
+
+static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID,
+                                                  HSTPF_FRAME_EST_THETA_ID, HSTPF_FRAME_HEALTH_RX_ID,
+                                                  HSTPF_FRAME_HEALTH_SYS_ID};
+static const uint16_t out_data_id[HSTPFD_N_OUTPUTS] = {
+    HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID, HSTPF_FRAME_EST_THETA_DATA_ID,
+    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID};
+static const uint32_t out_cycle_ms[HSTPFD_N_OUTPUTS] = {
+    HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS, HSTPF_FRAME_EST_THETA_CYCLE_MS,
+    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS};
+
+void hstpfd_tx_init(hstpfd_tx_state_t *st)
+{
+    unsigned i;
+    for (i = 0; i < HSTPFD_N_OUTPUTS; ++i) {
+        (void)hstpf_e2e_tx_init(&st->e2e[i], out_data_id[i]);
+    }
+}
+
+int64_t hstpfd_tx_cycle_us(unsigned i)
+{
+    return i < HSTPFD_N_OUTPUTS ? (int64_t)out_cycle_ms[i] * 1000 : 0;
+}
+
+uint32_t hstpfd_tx_id(unsigned i)
+{
+    return i < HSTPFD_N_OUTPUTS ? out_id[i] : 0u;
+}
+
+static uint8_t row_code(int row)
+{
+    if (row >= 0 && row < HSTPF_N_TRAIN_TYPES) {
+        return (uint8_t)row;
+    }
+    return row == -2 ? (uint8_t)HSTPF_CAN_EST_TYPE_DECLARED_TYPE_CUSTOM_CHOICE
+                     : (uint8_t)HSTPF_CAN_EST_TYPE_DECLARED_TYPE_NONE_CHOICE;
+}
+
+static double count(uint32_t n)
+{
+    return (double)n; /* the _raw helpers saturate at the signal's maximum */
+}
+
+int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t *v, hstpfd_frame_t *f)
+{
+    int n = -1;
+    f->flags = 0;
+    f->len = 0;
+    memset(f->data, 0, sizeof f->data);
+    if (i >= HSTPFD_N_OUTPUTS) {
+        return -1;
+    }
+    f->id = out_id[i];
+    switch (i) {
+    case 0: {
+        struct hstpf_can_est_state_t m;
+        (void)hstpf_can_est_state_init(&m);
+        m.est_valid = v->have_fix ? 1u : 0u;
+        m.est_position = hstpf_frames_est_state_est_position_raw(v->have_fix ? v->position_m : 0.0);
+        m.est_speed = hstpf_frames_est_state_est_speed_raw(v->have_fix ? v->speed_mps : 0.0);
+        n = hstpf_can_est_state_pack(f->data, &m, 8u);
+        break;
+    }
+    case 1: {
+        struct hstpf_can_est_type_t m;
+        (void)hstpf_can_est_type_init(&m);
+        m.type_status = hstpf_frames_est_type_type_status_raw((double)v->status);
+        m.declared_type = row_code(v->declared_row);
+        m.declared_weight = hstpf_frames_est_type_declared_weight_raw(v->declared_row == -1 ? 0.0 : v->declared_q);
+        m.leader_type = row_code(v->leader_row);
+        m.leader_weight = hstpf_frames_est_type_leader_weight_raw(v->leader_row == -1 ? 0.0 : v->leader_q);
+        n = hstpf_can_est_type_pack(f->data, &m, 8u);
+        break;
+    }
+    case 2: {
+        struct hstpf_can_est_theta_t m;
+        /* the signal ranges: c0 [0, 65.535], c1 [0, 0.065535], c2 [0, 0.0013107] */
+        const int sat = v->theta[0] < 0.0 || v->theta[0] > 65.535 || v->theta[1] < 0.0 || v->theta[1] > 0.065535 ||
+                        v->theta[2] < 0.0 || v->theta[2] > 0.0013107;
+        (void)hstpf_can_est_theta_init(&m);
+        m.theta_valid = v->have_fix ? 1u : 0u;
+        m.theta_saturated = (uint8_t)(v->have_fix && sat);
+        m.c0 = hstpf_frames_est_theta_c0_raw(v->theta[0]);
+        m.c1 = hstpf_frames_est_theta_c1_raw(v->theta[1]);
+        m.c2 = hstpf_frames_est_theta_c2_raw(v->theta[2]);
+        n = hstpf_can_est_theta_pack(f->data, &m, 8u);
+        break;
+    }
+    case 3: {
+        struct hstpf_can_health_rx_t m;
+        (void)hstpf_can_health_rx_init(&m);
+        m.pos_stale = v->pos_stale ? 1u : 0u;
+        m.tract_stale = v->trac_stale ? 1u : 0u;
+        m.bad_crc = hstpf_frames_health_rx_bad_crc_raw(count(v->bad_crc));
+        m.counter_repeat = hstpf_frames_health_rx_counter_repeat_raw(count(v->repeated));
+        m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(count(v->jump));
+        m.wrong_length = hstpf_frames_health_rx_wrong_length_raw(count(v->wrong_length));
+        n = hstpf_can_health_rx_pack(f->data, &m, 8u);
+        break;
+    }
+    default: {
+        struct hstpf_can_health_sys_t m;
+        (void)hstpf_can_health_sys_init(&m);
+        m.stale_events = hstpf_frames_health_sys_stale_events_raw(count(v->stale_events));
+        m.unknown_id = hstpf_frames_health_sys_unknown_id_raw(count(v->unknown_id));
+        m.error_frames = hstpf_frames_health_sys_error_frames_raw(count(v->error_frames));
+        m.degeneracy = hstpf_frames_health_sys_degeneracy_raw(count(v->degeneracy));
+        n = hstpf_can_health_sys_pack(f->data, &m, 8u);
+        break;
+    }
+    }
+    if (n != 8) {
+        return -1;
+    }
+    f->len = 8u;
+    return hstpf_e2e_protect(&st->e2e[i], f->data, f->len) == 0 ? 0 : -1;
+}

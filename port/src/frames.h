@@ -1,0 +1,79 @@
+/* hstpfd: the seam between the daemon and the frame codec. The daemon only
+ * sees decoded input samples (or why a frame was refused) and asks for its
+ * output frames by index; everything about IDs, layouts, scalings and E2E
+ * lives behind these functions (frames.c, on port/codec).
+ * Portable C99, no OS, no heap. */
+#ifndef HSTPFD_FRAMES_H
+#define HSTPFD_FRAMES_H
+
+#include <stdint.h>
+
+#include "frame.h"
+#include "hstpf_e2e.h"
+#include "hstpf/hstpf.h"
+
+/* What a received frame was. */
+typedef enum {
+    HSTPFD_RX_POSITION = 0, /* odometry position frame */
+    HSTPFD_RX_TRACTION = 1, /* traction/braking effort frame */
+    HSTPFD_RX_OUTPUT = 2,   /* one of our own output IDs (another estimator, or an echo) */
+    HSTPFD_RX_UNKNOWN = 3,  /* an ID the DBC does not have */
+    HSTPFD_RX_ERROR = 4,    /* an error frame */
+    HSTPFD_RX_FORMAT = 5    /* a known ID as extended, remote or CAN FD frame */
+} hstpfd_rx_kind_t;
+
+typedef struct {
+    hstpfd_rx_kind_t kind;
+    hstpf_e2e_result_t e2e; /* inputs: the E2E check */
+    uint8_t accepted;       /* inputs: E2E accepted */
+    uint8_t valid;          /* inputs: accepted and the sender's valid flag set */
+    double value;           /* position m, or total traction force kN */
+} hstpfd_rx_t;
+
+/* Receiver state: one E2E checker per input stream. */
+typedef struct {
+    hstpf_e2e_rx_t pos, trac;
+} hstpfd_rx_state_t;
+
+/* Returns 0, or -1 if a value is out of the checker's range. */
+int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms);
+/* Classifies, E2E-checks and decodes one frame received at now_ms. */
+void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t now_ms, hstpfd_rx_t *out);
+/* Stale supervision of both inputs at now_ms. */
+void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms);
+
+/* The two input IDs (for kernel filters). */
+#define HSTPFD_N_INPUTS 2
+uint32_t hstpfd_input_id(unsigned i);
+
+/* Everything the output frames carry. */
+typedef struct {
+    uint8_t have_fix;         /* the estimator has had its first fix */
+    double position_m;
+    double speed_mps;
+    hstpf_status_t status;
+    int declared_row;         /* Table 1 row, -2 custom, -1 none */
+    double declared_q;
+    int leader_row;           /* Table 1 row, -2 custom, -1 none */
+    double leader_q;
+    double theta[3];
+    uint8_t pos_stale, trac_stale;
+    uint32_t bad_crc, repeated, jump, wrong_length; /* summed over the inputs */
+    uint32_t stale_events, unknown_id, error_frames, degeneracy;
+} hstpfd_tx_values_t;
+
+/* Sender state: one E2E counter per output frame. */
+#define HSTPFD_N_OUTPUTS 5
+typedef struct {
+    hstpf_e2e_tx_t e2e[HSTPFD_N_OUTPUTS];
+} hstpfd_tx_state_t;
+
+void hstpfd_tx_init(hstpfd_tx_state_t *st);
+/* Cycle of output i, microseconds; its ID. Output 0 is the estimated state
+ * (sent after a step, at most once per cycle), the others are periodic. */
+int64_t hstpfd_tx_cycle_us(unsigned i);
+uint32_t hstpfd_tx_id(unsigned i);
+/* Packs and E2E-protects output i into f (t_us not set). Returns 0 or -1. */
+int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t *v, hstpfd_frame_t *f);
+
+#endif
