@@ -543,6 +543,7 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *sp)
     d->mean = (hstpf_real_t)mean;
     d->sd = (hstpf_real_t)sqrt(var > 0.0 ? var : 0.0);
     d->floor_slope = (hstpf_real_t)(var > 0.0 ? 1.0 / sqrt(var) : 1.0 / dx);
+    d->dd_max = (hstpf_real_t)(1e4 * (var > 0.0 ? sqrt(var) : dx));
     return HSTPF_OK;
 }
 

@@ -79,6 +79,9 @@ static inline hstpf_real_t hstpf__dist_logpdf(const hstpf_dist_t *d, hstpf_real_
     } else {
         return d->floor; /* NaN */
     }
+    /* beyond this the value is astronomically low anyway: cap the distance
+     * so that the quadratic cannot overflow to -inf */
+    dd = dd < d->dd_max ? dd : d->dd_max;
     {
         /* beyond the grid the floor slopes: finite, yet never flat, so a
          * cloud that lost the measurement is still pulled back to it */
@@ -102,9 +105,20 @@ static inline hstpf_real_t hstpf__exp_neg(hstpf_real_t x)
     if (x < (hstpf_real_t)-100) {
         return (hstpf_real_t)0;
     }
-    t = -x * (hstpf_real_t)1.4426950408889634; /* log2(e) */
-    n = (int32_t)t;
-    g = (t - (hstpf_real_t)n) * (hstpf_real_t)HSTPF__EXP_N;
+    /* Cody-Waite: n ln2 is subtracted in two parts (ln2_hi has 12 bits, so
+     * n * ln2_hi is exact) and the remainder keeps full precision */
+    n = (int32_t)(-x * (hstpf_real_t)1.4426950408889634);
+    t = ((-x - (hstpf_real_t)n * (hstpf_real_t)0.693145751953125) -
+         (hstpf_real_t)n * (hstpf_real_t)1.4286067653302e-06) *
+        (hstpf_real_t)1.4426950408889634;
+    if (t < (hstpf_real_t)0) {
+        t += (hstpf_real_t)1;
+        --n;
+    } else if (t >= (hstpf_real_t)1) {
+        t -= (hstpf_real_t)1;
+        ++n;
+    }
+    g = t * (hstpf_real_t)HSTPF__EXP_N;
     j = (int32_t)g;
     g -= (hstpf_real_t)j;
     v = hstpf__exp2_tab[j] + g * (hstpf__exp2_tab[j + 1] - hstpf__exp2_tab[j]);
@@ -116,8 +130,8 @@ static inline hstpf_real_t hstpf__exp_neg(hstpf_real_t x)
         return v * p;
     }
 #else
-    if (n > 126) {
-        return 0.0f;
+    if (n > 126 || n < 0) {
+        return n < 0 ? 1.0f : 0.0f;
     }
     {
         const uint32_t bits = (uint32_t)(127 - n) << 23;

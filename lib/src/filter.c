@@ -268,28 +268,31 @@ static void first_fix(hstpf_t *f, double y)
     f->have_fix = 1;
 }
 
-/* The cumulative count is clamped to [previous, n] and the last is forced to
- * n, so float round-off can never index past the end. */
+/* The cumulative count is clamped to [previous, n]; a particle of weight 0
+ * never gets a copy, and what round-off leaves of n at the end goes to the
+ * last particle of positive weight, so nothing can index past the end. */
 void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
 {
     real c = 0;
     uint16_t i, prev = 0;
+    int32_t last = -1;
     for (i = 0; i < n; ++i) {
-        int32_t k;
-        c += w[i];
-        if (i + 1u == n) {
-            k = n;
-        } else {
+        int32_t k = prev;
+        if (w[i] > (real)0) {
+            c += w[i];
+            last = i;
             k = (int32_t)ceil(c * (real)n - u0);
-            if (k < (int32_t)prev) {
-                k = prev;
-            }
-            if (k > (int32_t)n) {
-                k = n;
-            }
+            k = k < (int32_t)prev ? (int32_t)prev : (k > (int32_t)n ? (int32_t)n : k);
         }
         cnt[i] = (uint16_t)(k - (int32_t)prev);
         prev = (uint16_t)k;
+    }
+    if (last < 0) {
+        for (i = 0; i < n; ++i) {
+            cnt[i] = 1; /* no usable weight: keep every particle */
+        }
+    } else if (prev < n) {
+        cnt[last] = (uint16_t)(cnt[last] + (n - prev));
     }
 }
 

@@ -84,6 +84,7 @@ typedef struct {
     hstpf_real_t tail_b[2], tail_c[2];      /* tails: left [0], right [1] */
     hstpf_real_t floor;                     /* absolute log-density floor */
     hstpf_real_t floor_slope;               /* floor's fall beyond the grid, 1/sd */
+    hstpf_real_t dd_max;                    /* tail distance cap: 1e4 sd */
     hstpf_real_t lp_max;                    /* maximum of lp[] */
     hstpf_real_t mean;                      /* exact mean */
     hstpf_real_t sd;                        /* exact standard deviation */
