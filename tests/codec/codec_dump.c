@@ -6,9 +6,11 @@
  *                              conversion, cantools pack, E2E protect) and
  *                              prints one JSON line per frame: inputs, bytes,
  *                              and the values unpacked back by the C codec.
- *   hstpf_codec_dump decode    reads lines "ID HEXBYTES" (ID in hex) from
- *                              stdin and prints what the C codec unpacks and
- *                              the E2E check result (one receiver per ID).
+ *   hstpf_codec_dump decode    reads a candump -L log on stdin and prints,
+ *                              per frame, what the C codec unpacks and the
+ *                              E2E check result (one default receiver per
+ *                              ID, timestamps as its clock), then the final
+ *                              receiver counts per ID.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -229,24 +231,44 @@ static void encode_set(void)
 
 static hstpf_e2e_rx_t rx[HSTPF_FRAMES_COUNT];
 
-static int decode_line(const char *line, uint32_t now_ms)
+/* One candump -L line: "(SECONDS) CHANNEL ID#HEX [R|T]". */
+static int decode_line(const char *line)
 {
     char *end;
-    unsigned long id = strtoul(line, &end, 16);
+    double ts;
+    unsigned long id;
     uint8_t f[64];
     size_t n = 0;
-    const hstpf_frame_info_t *fi = hstpf_frame_find((uint32_t)id);
-    const char *p = end;
+    const hstpf_frame_info_t *fi;
+    const char *p;
     hstpf_e2e_result_t r;
+    uint32_t now_ms;
 
-    while (*p == ' ') {
-        p++;
+    p = strchr(line, '(');
+    if (p == NULL) {
+        return -1;
     }
-    while (p[0] != '\0' && p[1] != '\0' && p[0] != '\n' && n < sizeof f) {
-        char b[3] = {p[0], p[1], 0};
+    ts = strtod(p + 1, &end);
+    now_ms = (uint32_t)(uint64_t)(ts * 1000.0 + 0.5); /* wraps: only differences matter */
+    p = strchr(end, ' ');
+    p = p != NULL ? strchr(p + 1, ' ') : NULL; /* skip the channel */
+    if (p == NULL) {
+        return -1;
+    }
+    id = strtoul(p + 1, &end, 16);
+    if (*end != '#') {
+        return -1;
+    }
+    p = end + 1;
+    while (p[0] != '\0' && p[1] != '\0' && p[0] != ' ' && p[0] != '\n' && n < sizeof f) {
+        char b[3];
+        b[0] = p[0];
+        b[1] = p[1];
+        b[2] = 0;
         f[n++] = (uint8_t)strtoul(b, NULL, 16);
         p += 2;
     }
+    fi = hstpf_frame_find((uint32_t)id);
     if (fi == NULL) {
         printf("{\"id\":%lu,\"unknown\":true}\n", id);
         return 0;
@@ -325,19 +347,28 @@ static int decode_stdin(void)
 {
     char line[512];
     size_t i;
-    uint32_t t = 0;
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         hstpf_e2e_rx_config_t c;
         hstpf_e2e_rx_config_default(&c, hstpf_frames[i].data_id, hstpf_frames[i].length);
-        c.timeout_ms = 0x7FFFFFFFu; /* no clock in this program: never stale */
         hstpf_e2e_rx_init(&rx[i], &c);
     }
     while (fgets(line, sizeof line, stdin) != NULL) {
-        if (line[0] != '\n' && line[0] != '\0') {
-            decode_line(line, t);
-            t += 10u;
+        if (decode_line(line) != 0 && line[0] != '\n') {
+            fprintf(stderr, "bad line: %s", line);
+            return 1;
         }
     }
+    /* Final per-frame receiver counts, for comparison with hstpf_tools.e2e. */
+    printf("{\"counts\":{");
+    for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
+        const hstpf_e2e_counts_t *c = hstpf_e2e_rx_counts(&rx[i]);
+        printf("%s\"0x%03X\":{\"ok\":%u,\"lost\":%u,\"wrong_length\":%u,\"bad_crc\":%u,\"repeated\":%u,\"jump\":%u,"
+               "\"stale\":%u}",
+               i ? "," : "", (unsigned)hstpf_frames[i].can_id, (unsigned)c->ok, (unsigned)c->lost,
+               (unsigned)c->wrong_length, (unsigned)c->bad_crc, (unsigned)c->repeated, (unsigned)c->jump,
+               (unsigned)c->stale);
+    }
+    printf("}}\n");
     return 0;
 }
 

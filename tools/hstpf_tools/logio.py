@@ -1,0 +1,45 @@
+"""candump logs through python-can's readers and writers."""
+from typing import Iterable, List, Tuple
+
+import can
+
+from .frames import FrameCodec
+
+
+def message(t: float, frame_id: int, data: bytes, channel: str = "vcan0") -> can.Message:
+    return can.Message(timestamp=t, arbitration_id=frame_id, data=data, is_extended_id=False, channel=channel,
+                       is_rx=False)
+
+
+def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") -> int:
+    """Writes messages with can.Logger (the file's suffix picks the format:
+    .log is candump -L). Returns the count."""
+    n = 0
+    kw = {"channel": channel} if str(path).endswith(".log") else {}
+    with can.Logger(path, **kw) as log:
+        for m in msgs:
+            log.on_message_received(m)
+            n += 1
+    return n
+
+
+def read_log(path: str) -> List[can.Message]:
+    with can.LogReader(path) as r:
+        return list(r)
+
+
+def input_frames(codec: FrameCodec, t0: float, times, positions, forces_kn, channel: str = "vcan0",
+                 pos_valid=None, trac_valid=None) -> List[can.Message]:
+    """Position and traction frames at the given times, E2E protected.
+    At each time the position frame comes first: the traction frame at t
+    carries the effort applied from t on, so a receiver that steps on the
+    position at t still holds the previous interval's effort."""
+    out = []
+    for i, (t, y, f) in enumerate(zip(times, positions, forces_kn)):
+        pv = 1 if pos_valid is None else int(pos_valid[i])
+        tv = 1 if trac_valid is None else int(trac_valid[i])
+        fid, d = codec.encode("Position", {"PosValid": pv, "PosQuality": 0, "Position": y if pv else 0.0})
+        out.append(message(t0 + t, fid, d, channel))
+        fid, d = codec.encode("Traction", {"TractValid": tv, "TractForce": f if tv else 0.0})
+        out.append(message(t0 + t, fid, d, channel))
+    return out

@@ -1,0 +1,264 @@
+"""hstpf-score: the estimator's output frames against the simulation's truth.
+
+Frame times are mapped to simulation time in one of two ways:
+  inputs  the recorded log also holds the Position frames that were on the
+          bus; each one is found by content in the simulated input log
+          (--input-log), whose frame times are simulation times (+ its
+          first timestamp). An output frame gets the time of the latest
+          input position seen before it. Exact at any replay speed and with
+          faults (corrupted or injected frames simply do not match).
+  time    simulation time = (timestamp - t0) x speed (--t0, --speed): for a
+          log whose timestamps are already simulation times (an offline
+          run that stamps outputs with input times), or a plain replay.
+"""
+import argparse
+import csv
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Dict, List, Optional
+
+import numpy as np
+
+from . import e2e
+from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
+                     type_name)
+from .logio import read_log
+from .model import Theta
+
+V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
+
+
+def read_truth(path: str) -> Dict[str, np.ndarray]:
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        raise ValueError(f"{path}: no rows")
+    out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
+    r0 = rows[-1]
+    out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
+    return out
+
+
+def w_rms_rel(est: Theta, true: Theta) -> float:
+    """RMS relative error of W(V) over 0..350 km/h in 1 km/h steps."""
+    v = V_GRID_KMH / 3.6
+    wt, we = true.resistance(v), est.resistance(v)
+    return float(np.sqrt(np.mean(((we - wt) / wt) ** 2)))
+
+
+def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
+    """Decoded output series with simulation times."""
+    series: Dict[str, List] = {EST_STATE: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [], HEALTH_SYS: []}
+    t_sim: Optional[float] = None
+    e2e_results: Dict[str, Dict[str, int]] = {}
+    for m in rec_msgs:
+        if m.is_error_frame:
+            continue
+        if m.arbitration_id == codec.message(POSITION).frame_id:
+            t = input_map.get(bytes(m.data))
+            if t is not None:
+                t_sim = t
+            continue
+        name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
+        if name not in series:
+            continue
+        e2e_results.setdefault(name, {}).setdefault(res, 0)
+        e2e_results[name][res] += 1
+        if sig is None:
+            continue
+        t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
+        if t is None:
+            continue
+        series[name].append((t, sig))
+    return series, e2e_results
+
+
+def metrics(series, truth) -> dict:
+    th_true: Theta = truth["theta"]
+    tt = truth["time_s"]
+    res: dict = {"true_type": th_true.name, "true_theta": [th_true.c0, th_true.c1, th_true.c2]}
+    st = [(t, s) for t, s in series[EST_STATE] if s["EstValid"] >= 0.5 and tt[0] <= t <= tt[-1]]
+    if st:
+        t = np.array([x[0] for x in st])
+        pos = np.array([x[1]["EstPosition"] for x in st])
+        spd = np.array([x[1]["EstSpeed"] for x in st])
+        ep = pos - np.interp(t, tt, truth["position_m"])
+        ev = spd - np.interp(t, tt, truth["speed_mps"])
+        res.update(position_rms_m=float(np.sqrt(np.mean(ep**2))), speed_rms_mps=float(np.sqrt(np.mean(ev**2))),
+                   state_frames=len(st))
+    ty = series[EST_TYPE]
+    declared, decision = None, None
+    if ty:
+        last = int(ty[-1][1]["DeclaredType"])
+        res["final_status"] = ["undecided", "declared", "changed"][min(int(ty[-1][1]["TypeStatus"]), 2)]
+        res["final_leader"] = type_name(int(ty[-1][1]["LeaderType"]))
+        res["final_leader_weight"] = float(ty[-1][1]["LeaderWeight"])
+        if last != TYPE_NONE:
+            declared = type_name(last)
+            decision = ty[-1][0]
+            for t, s in reversed(ty):  # start of the final, unbroken declaration
+                if int(s["DeclaredType"]) != last:
+                    break
+                decision = t
+    res["declared_type"] = declared
+    res["declared_correct"] = declared == th_true.name
+    res["decision_time_s"] = decision
+    thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
+    if thf:
+        t_last, s_last = thf[-1]
+        est = Theta("estimate", s_last["C0"], s_last["C1"], s_last["C2"])
+        true = np.array([th_true.c0, th_true.c1, th_true.c2])
+        e = np.array([est.c0, est.c1, est.c2])
+        res["final_theta"] = e.tolist()
+        res["theta_rel_err"] = ((e - true) / true).tolist()
+        res["w_rms_rel_err"] = w_rms_rel(est, th_true)
+        if decision is not None:
+            after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
+            if len(after):
+                res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true), axis=0).tolist()
+    for name in (HEALTH_RX, HEALTH_SYS):
+        if series[name]:
+            s = series[name][-1][1]
+            res.setdefault("health", {}).update({k: int(v) for k, v in s.items() if not k.startswith("E2e")})
+    return res
+
+
+def plots(series, truth, outdir: Path) -> List[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    outdir.mkdir(parents=True, exist_ok=True)
+    files = []
+    th_true: Theta = truth["theta"]
+    tt = truth["time_s"]
+    st = [(t, s) for t, s in series[EST_STATE] if s["EstValid"] >= 0.5]
+    if st:
+        t = np.array([x[0] for x in st])
+        fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8)
+        ax[0].set_ylabel("position error (m)")
+        ax[1].plot(tt, truth["speed_mps"] * 3.6, label="true", lw=1.2)
+        ax[1].plot(t, np.array([x[1]["EstSpeed"] for x in st]) * 3.6, label="estimate", lw=0.8)
+        ax[1].set_ylabel("speed (km/h)")
+        ax[1].set_xlabel("time (s)")
+        ax[1].legend()
+        fig.suptitle("State estimate vs truth")
+        files.append(_save(fig, outdir / "states.png"))
+    if series[EST_TYPE]:
+        t = np.array([x[0] for x in series[EST_TYPE]])
+        fig, ax = plt.subplots(figsize=(9, 4))
+        lead = np.array([int(x[1]["LeaderType"]) for x in series[EST_TYPE]])
+        lw = np.array([x[1]["LeaderWeight"] for x in series[EST_TYPE]])
+        for idx in sorted(set(lead.tolist())):
+            sel = lead == idx
+            ax.plot(t[sel], lw[sel], ".", ms=3, label=f"leader {type_name(idx)}")
+        ax.axhline(0.9, color="grey", ls="--", lw=0.8)
+        ax.set_ylim(0, 1.05)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("model weight q")
+        ax.set_title(f"Leading model weight (truth {th_true.name})")
+        ax.legend()
+        files.append(_save(fig, outdir / "weights.png"))
+    thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
+    if thf:
+        t = np.array([x[0] for x in thf])
+        fig, ax = plt.subplots(figsize=(9, 4))
+        for k, c in (("C0", th_true.c0), ("C1", th_true.c1), ("C2", th_true.c2)):
+            ax.plot(t, 100 * (np.array([x[1][k] for x in thf]) - c) / c, label=k.lower())
+        ax.axhspan(-5, 5, color="green", alpha=0.1)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("relative error (%)")
+        ax.set_title("Estimated Davis coefficients")
+        ax.legend()
+        files.append(_save(fig, outdir / "theta.png"))
+        s = thf[-1][1]
+        est = Theta("estimate", s["C0"], s["C1"], s["C2"])
+        fig, ax = plt.subplots(figsize=(7, 4))
+        ax.plot(V_GRID_KMH, th_true.resistance(V_GRID_KMH / 3.6), label=f"true ({th_true.name})")
+        ax.plot(V_GRID_KMH, est.resistance(V_GRID_KMH / 3.6), "--", label="estimate (final)")
+        ax.set_xlabel("speed (km/h)")
+        ax.set_ylabel("W (N/kN)")
+        ax.set_title("Running resistance")
+        ax.legend()
+        files.append(_save(fig, outdir / "resistance.png"))
+    return files
+
+
+def _save(fig, path: Path) -> str:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return str(path)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
+                                epilog=__doc__.split("\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("log", help="recorded log with the estimator's frames")
+    p.add_argument("--truth", required=True, help="truth CSV from hstpf-simulate")
+    p.add_argument("--input-log", help="the simulated input log (for --align inputs)")
+    p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
+                   help="auto: inputs when --input-log is given, else time")
+    p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
+    p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
+    p.add_argument("--json", help="write the metrics as JSON here ('-' for stdout)")
+    p.add_argument("--plots", help="write PNG plots into this directory")
+    p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
+    return p
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return str(v)
+
+
+def main(argv=None) -> int:
+    a = build_parser().parse_args(argv)
+    align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
+    if align == "inputs" and not a.input_log:
+        print("hstpf-score: --align inputs needs --input-log", file=sys.stderr)
+        return 2
+    codec = FrameCodec(a.dbc, timeout_s=math.inf)
+    input_map: Dict[bytes, float] = {}
+    if align == "inputs":
+        inp = read_log(a.input_log)
+        pos_id = codec.message(POSITION).frame_id
+        t_first = inp[0].timestamp if inp else 0.0
+        for m in inp:
+            if m.arbitration_id == pos_id:
+                input_map.setdefault(bytes(m.data), m.timestamp - t_first)
+    truth = read_truth(a.truth)
+    series, e2e_res = collect(read_log(a.log), codec, align, input_map, a.t0, a.speed)
+    res = metrics(series, truth)
+    res["align"] = align
+    res["output_e2e"] = e2e_res
+    res["frames"] = {k: len(v) for k, v in series.items()}
+    if a.plots:
+        res["plots"] = plots(series, truth, Path(a.plots))
+    for k, v in res.items():
+        if k not in ("output_e2e", "health", "frames"):
+            print(f"{k:38s} {_fmt(v)}")
+    if "health" in res:
+        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()))
+    bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
+    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}))
+    if a.json:
+        text = json.dumps(res, indent=1)
+        if a.json == "-":
+            print(text)
+        else:
+            Path(a.json).write_text(text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
