@@ -21,7 +21,7 @@ def build_parser() -> argparse.ArgumentParser:
         "traction held over each step.",
     )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--type", default="CRH3", help="Table 1 type (default CRH3): " + ", ".join(r[0] for r in TABLE1))
+    g.add_argument("--type", help="Table 1 type (default CRH3): " + ", ".join(r[0] for r in TABLE1))
     g.add_argument("--coeffs", help="custom c0,c1,c2 (N/kN, per km/h, per (km/h)^2)")
     p.add_argument("--profile", default="paper", choices=sorted(model.PROFILES), help="speed profile (default paper)")
     p.add_argument("--track", help="track CSV: start_m,gradient_permille,curve_radius_m")
@@ -71,7 +71,8 @@ def write_truth(path, run: model.Run, mass_t: float) -> None:
 def main(argv=None) -> int:
     a = build_parser().parse_args(argv)
     try:
-        theta = model.theta_for(a.type, [float(x) for x in a.coeffs.split(",")] if a.coeffs else None)
+        theta = (model.theta_for(None, [float(x) for x in a.coeffs.split(",")]) if a.coeffs
+                 else model.theta_for(a.type or "CRH3"))
         ws, wv, e = noise_from_args(a)
         track = model.Track.from_csv(a.track) if a.track else None
         if a.frame_period <= 0 or a.mass_t <= 0:

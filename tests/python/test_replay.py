@@ -1,0 +1,127 @@
+"""hstpf-replay: fault injection counts as an E2E receiver sees them,
+reproducibility, and timing on python-can's virtual bus; hstpf-record."""
+import json
+import threading
+import time
+
+import can
+import pytest
+
+from hstpf_tools import record, replay
+from hstpf_tools.frames import FrameCodec
+from hstpf_tools.logio import message, read_log, write_log
+from hstpf_tools.replay import inject
+
+
+@pytest.fixture(scope="module")
+def clean_msgs():
+    """120 s of position + traction frames at 10 Hz."""
+    c = FrameCodec()
+    out = []
+    for k in range(1200):
+        for name, v in (("Position", {"PosValid": 1, "Position": 50.0 * k * 0.1}), ("Traction", {"TractValid": 1, "TractForce": 80.0})):
+            fid, d = c.encode(name, v)
+            out.append(message(500.0 + k * 0.1, fid, d))
+    return out
+
+
+def receive(msgs):
+    c = FrameCodec()
+    unknown = 0
+    for m in msgs:
+        name, _, res = c.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
+        unknown += res == "unknown_id"
+    return {f"0x{k:03X}": rx.counts for k, rx in c.receivers.items()}, unknown
+
+
+def test_clean_replay_has_no_faults(clean_msgs):
+    out, rep = inject(clean_msgs, {}, {})
+    assert len(out) == len(clean_msgs) and rep["injected"] == {}
+    counts, _ = receive(out)
+    assert counts["0x100"] == {"ok": 1200, "lost": 0, "wrong_length": 0, "bad_crc": 0, "repeated": 0, "jump": 0, "stale": 0}
+
+
+@pytest.mark.parametrize("kind,field", [("corrupt", "bad_crc"), ("truncate", "wrong_length"),
+                                        ("duplicate", "repeated"), ("drop", "lost"),
+                                        ("delay", "jump"), ("reorder", "jump")])
+def test_each_fault_is_seen_as_documented(clean_msgs, kind, field):
+    out, rep = inject(clean_msgs, {kind: 0.02}, {}, seed=3)
+    counts, _ = receive(out)
+    for fid in ("0x100", "0x101"):
+        n = rep["injected"][kind][fid]
+        assert n > 5
+        assert counts[fid][field] == n, (kind, fid, counts[fid])
+        others = {k: v for k, v in counts[fid].items() if k not in (field, "ok", "lost")}
+        assert all(v == 0 for v in others.values()), others
+    if kind == "delay":  # a frame 2.5 cycles late: one jump, and the gaps it leaves
+        assert counts["0x100"]["lost"] == 3 * rep["injected"]["delay"]["0x100"]
+
+
+def test_windows_silence_and_unknown(clean_msgs):
+    out, rep = inject(clean_msgs, {"unknown": 0.01}, {"corrupt": [(10.0, 12.0)]}, seed=9,
+                      silence=[(30.0, 32.0), (60.0, 60.7)], ids={0x100})
+    counts, unknown = receive(out)
+    assert rep["injected"]["corrupt"] == {"0x100": 20}  # 10.0 .. 11.9 s
+    assert counts["0x100"]["bad_crc"] == 20 and counts["0x101"]["bad_crc"] == 0
+    assert rep["injected"]["silence"] == {"0x100": 27}  # 20 + 7 frames
+    # both silences last > 0.5 s, and so do the 2 s of rejected frames: 3 stale episodes
+    assert counts["0x100"]["stale"] == 3 and counts["0x101"]["stale"] == 0
+    assert unknown == rep["totals"]["unknown"] > 0
+    assert all(m.arbitration_id in (0x100, 0x101, 0x7F0) for m in out)
+
+
+def test_random_silences_and_reproducibility(clean_msgs):
+    a, ra = inject(clean_msgs, {"drop": 0.01, "corrupt": 0.01}, {}, seed=5, silence_rate=0.02, silence_len=1.5)
+    b, rb = inject(clean_msgs, {"drop": 0.01, "corrupt": 0.01}, {}, seed=5, silence_rate=0.02, silence_len=1.5)
+    c, rc = inject(clean_msgs, {"drop": 0.01, "corrupt": 0.01}, {}, seed=6, silence_rate=0.02, silence_len=1.5)
+    assert ra == rb and [bytes(m.data) for m in a] == [bytes(m.data) for m in b]
+    assert ra != rc
+    counts, _ = receive(a)
+    assert counts["0x100"]["stale"] == len(ra["silence_windows"]) > 0
+
+
+def test_cli_to_log_and_report(clean_msgs, tmp_path, capsys):
+    src, out, rep = tmp_path / "in.log", tmp_path / "out.log", tmp_path / "rep.json"
+    write_log(str(src), clean_msgs)
+    assert replay.main([str(src), "-o", str(out), "--duplicate-window", "5:6", "--ids", "0x101", "--report", str(rep)]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed == json.loads(rep.read_text())
+    assert printed["injected"] == {"duplicate": {"0x101": 10}}
+    assert len(read_log(str(out))) == len(clean_msgs) + 10
+    assert replay.main([str(src)]) == 2  # neither a channel nor an output
+    assert replay.main([str(src), "-o", str(out), "--drop", "0.7", "--corrupt", "0.7"]) == 2
+
+
+def test_replay_and_record_on_virtual_bus(clean_msgs, tmp_path, capsys):
+    """3 s of log at 10x: about 0.3 s on the bus, all frames recorded in order."""
+    src, rec = tmp_path / "in.log", tmp_path / "rec.log"
+    msgs = [m for m in clean_msgs if m.timestamp < 503.0 - 1e-9]
+    write_log(str(src), msgs)
+    rx_bus = can.Bus(interface="virtual", channel="hstpf-test", receive_own_messages=False)
+    result = {}
+    th = threading.Thread(target=lambda: result.update(record.record(rx_bus, str(rec), quiet=0.5, first_timeout=10)))
+    th.start()
+    try:
+        t = time.perf_counter()
+        assert replay.main([str(src), "--interface", "virtual", "--channel", "hstpf-test", "--speed", "10",
+                            "--corrupt-window", "1:1.5", "--ids", "0x100"]) == 0
+        wall = time.perf_counter() - t
+        th.join(10)
+    finally:
+        rx_bus.shutdown()
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["sent"] == len(msgs) == 60 and rep["injected"]["corrupt"] == {"0x100": 5}
+    assert 0.25 <= wall < 2.0
+    assert result["stopped"] == "quiet" and result["frames"] == 60
+    got = read_log(str(rec))
+    assert [bytes(m.data) for m in got if m.arbitration_id == 0x101] == [bytes(m.data) for m in msgs if m.arbitration_id == 0x101]
+    assert 0.2 <= got[-1].timestamp - got[0].timestamp < 1.5
+    counts, _ = receive(got)
+    assert counts["0x100"]["bad_crc"] == 5 and counts["0x101"]["bad_crc"] == 0
+
+
+def test_record_cli_gives_up_without_frames(tmp_path, capsys):
+    assert record.main(["--interface", "virtual", "--channel", "hstpf-empty", "-o", str(tmp_path / "r.log"),
+                        "--quiet", "0.1", "--first-timeout", "0.2"]) == 1
+    assert json.loads(capsys.readouterr().out)["stopped"] == "no_frames"
+    assert record.main(["--interface", "virtual", "-o", str(tmp_path / "r.log")]) == 2
