@@ -1,0 +1,132 @@
+"""hstpf-score on a scripted "estimator" whose errors are known."""
+import json
+
+import numpy as np
+import pytest
+
+from hstpf_tools import score, simulate
+from hstpf_tools.frames import FrameCodec
+from hstpf_tools.logio import message, read_log, write_log
+
+CRH3 = (0.79, 0.0064, 0.000115)
+SS8 = (1.02, 0.0035, 0.000426)
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    d = tmp_path_factory.mktemp("score")
+    log = d / "run.log"
+    assert simulate.main(["-o", str(log), "--duration", "400", "--seed", "2"]) == 0
+    rows = np.genfromtxt(d / "run_truth.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    return d, log, rows
+
+
+def outputs(codec, t, truth_s, truth_v):
+    """Output frames an estimator might send at simulation time t: position
+    1 m ahead, speed 0.1 m/s fast; undecided (leader SS8) before 150 s,
+    then CRH3 declared with exact coefficients."""
+    out = [("EstState", {"EstValid": 1, "EstPosition": truth_s + 1.0, "EstSpeed": truth_v + 0.1})]
+    if abs(t - round(t)) < 1e-6:  # 1 Hz frames
+        if t < 150:
+            out.append(("EstType", {"TypeStatus": 0, "DeclaredType": 255, "DeclaredWeight": 0, "LeaderType": 6, "LeaderWeight": 0.5}))
+            th = [(a + b) / 2 for a, b in zip(CRH3, SS8)]
+        else:
+            out.append(("EstType", {"TypeStatus": 1, "DeclaredType": 2, "DeclaredWeight": 0.97, "LeaderType": 2, "LeaderWeight": 0.97}))
+            th = CRH3
+        out.append(("EstTheta", {"ThetaValid": 1, "C0": th[0], "C1": th[1], "C2": th[2]}))
+        out.append(("HealthRx", {"BadCrc": 4, "CounterRepeat": 1}))
+        out.append(("HealthSys", {"StaleEvents": 2, "Degeneracy": 0}))
+    return [(codec.encode(n, v)) for n, v in out]
+
+
+def check_metrics(res):
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)  # 1 cm resolution
+    assert res["speed_rms_mps"] == pytest.approx(0.1, abs=0.006)
+    assert res["declared_type"] == "CRH3" and res["declared_correct"] is True
+    assert res["decision_time_s"] == pytest.approx(150.0)
+    assert res["final_status"] == "declared" and res["final_leader"] == "CRH3"
+    assert np.max(np.abs(res["theta_rel_err"])) < 2e-4  # signal resolution
+    assert res["w_rms_rel_err"] < 2e-4
+    assert np.max(res["theta_max_abs_rel_err_after_decision"]) < 2e-4
+    assert res["health"]["BadCrc"] == 4 and res["health"]["StaleEvents"] == 2
+
+
+def test_time_aligned_offline_log(sim, tmp_path, capsys):
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for k in range(0, len(rows) - 1):
+        for sub in range(10):  # every position frame time, 0.1 s
+            t = k + sub / 10
+            s = np.interp(t, rows["time_s"], rows["position_m"])
+            v = np.interp(t, rows["time_s"], rows["speed_mps"])
+            msgs += [message(t, fid, data) for fid, data in outputs(codec, t, s, v)]
+    rec = tmp_path / "est.log"
+    write_log(str(rec), msgs)
+    js, plots = tmp_path / "m.json", tmp_path / "plots"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js), "--plots", str(plots)]) == 0
+    res = json.loads(js.read_text())
+    assert res["align"] == "time"
+    check_metrics(res)
+    assert sorted(p.name for p in plots.iterdir()) == ["resistance.png", "states.png", "theta.png", "weights.png"]
+    assert all(p.stat().st_size > 10000 for p in plots.iterdir())
+    assert "declared_type" in capsys.readouterr().out
+
+
+def test_input_aligned_replay_with_faults(sim, tmp_path):
+    """A recorded bus log: inputs replayed 20x faster at wall-clock times,
+    some position frames lost or corrupted, outputs right after each
+    position frame. Scoring by input content recovers simulation time."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    rng = np.random.default_rng(0)
+    msgs = []
+    t_wall = 1.7e9
+    for i, m in enumerate(read_log(str(log))):
+        t_sim = m.timestamp
+        t_wall = 1.7e9 + t_sim / 20 + rng.uniform(0, 0.002)
+        data = bytes(m.data)
+        if m.arbitration_id == 0x100 and i % 37 == 0:
+            continue  # lost
+        if m.arbitration_id == 0x100 and i % 41 == 0:
+            data = bytes([data[0] ^ 0xFF]) + data[1:]  # corrupted: matches nothing
+        msgs.append(message(t_wall, m.arbitration_id, data))
+        if m.arbitration_id == 0x100 and i % 37 and i % 41:
+            s = np.interp(t_sim, rows["time_s"], rows["position_m"])
+            v = np.interp(t_sim, rows["time_s"], rows["speed_mps"])
+            msgs += [message(t_wall + 0.0005, fid, dd) for fid, dd in outputs(codec, t_sim, s, v)]
+    rec = tmp_path / "bus.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "m.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["align"] == "inputs"
+    check_metrics(res)
+    # time alignment with the right speed is close, but not exact
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--align", "time", "--t0", "1.7e9",
+                       "--speed", "20", "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["position_rms_m"] < 5.0
+
+
+def test_wrong_declaration_is_reported(sim, tmp_path):
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for k in range(0, 300):
+        fid, data = codec.encode("EstType", {"TypeStatus": 1 if k >= 100 else 0, "DeclaredType": 6 if k >= 100 else 255,
+                                             "DeclaredWeight": 0.95, "LeaderType": 6, "LeaderWeight": 0.95})
+        msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": SS8[0], "C1": SS8[1], "C2": SS8[2]})
+        msgs.append(message(float(k), fid, data))
+    rec = tmp_path / "wrong.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "m.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["declared_type"] == "SS8" and res["declared_correct"] is False and res["decision_time_s"] == 100.0
+    assert res["theta_rel_err"][2] == pytest.approx(0.000426 / 0.000115 - 1, rel=1e-3)
+    # W(V) relative error by hand at 0..350 km/h
+    V = np.arange(0, 351.0)
+    wt = CRH3[0] + CRH3[1] * V + CRH3[2] * V**2
+    we = SS8[0] + SS8[1] * V + SS8[2] * V**2
+    assert res["w_rms_rel_err"] == pytest.approx(np.sqrt(np.mean(((we - wt) / wt) ** 2)), rel=1e-3)
