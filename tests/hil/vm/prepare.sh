@@ -57,19 +57,19 @@ busybox=$(dpkg-query -L busybox-static | grep -m1 '/busybox$')
 [ -x "$busybox" ] || die "busybox-static installed but its binary was not found"
 
 # --- which kernel ------------------------------------------------------------
+# The metapackage pins its kernel: "Depends: linux-image-6.1.0-NN-amd64 (= V)".
+# One apt-cache call (about 0.5 s) gives both name and version.
 kernel_pkg() {
-    apt-cache depends linux-image-amd64 2>/dev/null |
-        awk '$1 == "Depends:" && $2 ~ /^linux-image-/ { print $2; exit }'
+    apt-cache show --no-all-versions linux-image-amd64 2>/dev/null |
+        sed -n 's/^Depends:.*\(linux-image-[^ ,]*\) (= \([^)]*\)).*/\1 \2/p' | head -n1
 }
-kpkg=$(kernel_pkg)
-if [ -z "$kpkg" ] && is_root; then
+kpkg_ver=$(kernel_pkg)
+if [ -z "$kpkg_ver" ] && is_root; then
     log "package lists do not know linux-image-amd64; running apt-get update"
     apt-get update -q -o DPkg::Lock::Timeout=300 </dev/null >&2 || true
-    kpkg=$(kernel_pkg)
+    kpkg_ver=$(kernel_pkg)
 fi
-kver=
-[ -n "$kpkg" ] && kver=$(apt-cache show --no-all-versions "$kpkg" 2>/dev/null |
-    awk '$1 == "Version:" { print $2; exit }')
+kpkg=${kpkg_ver% *} kver=${kpkg_ver#* }
 
 mkdir -p "$cache"
 if [ -z "$kpkg" ] || [ -z "$kver" ]; then
@@ -113,8 +113,15 @@ if [ -z "$deb" ]; then
     dl_opts=()
     # Root's apt drops to user _apt, which cannot write here; it would only warn.
     is_root && dl_opts=(-o APT::Sandbox::User=root)
-    (cd "$work" && apt-get download -q "${dl_opts[@]}" "$kpkg=$kver" </dev/null >&2) ||
+    if ! (cd "$work" && apt-get download -q "${dl_opts[@]}" "$kpkg=$kver" </dev/null >&2); then
+        # Offline with a newer kernel in the lists: the older image still works.
+        if [ -e "$cache/current/ready" ]; then
+            log "warning: apt-get download $kpkg=$kver failed; using the cached image"
+            readlink -f "$cache/current"
+            exit 0
+        fi
         die "apt-get download $kpkg=$kver failed"
+    fi
     mv "$work"/*.deb "$deb_dir"/
     deb=$(find "$deb_dir" -maxdepth 1 -name '*.deb' -print -quit)
 fi

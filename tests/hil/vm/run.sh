@@ -40,7 +40,8 @@ img=$("$here/prepare.sh") || die "preparing the VM image failed"
 job=$(mktemp -d "${TMPDIR:-/tmp}/hstpf-vm.XXXXXX")
 case $job in *[[:space:]]*) rm -rf "$job"; job=$(mktemp -d /tmp/hstpf-vm.XXXXXX) ;; esac
 
-qpid= tails=()
+qpid='' tails=()
+# shellcheck disable=SC2329  # called by the EXIT trap
 cleanup() {
     local rc=$?
     trap - EXIT INT TERM
