@@ -408,8 +408,9 @@ if(NOT QEMU_ARM)
   message("on-target run SKIPPED: qemu-system-arm not found (HSTPF_CROSS_OPTIONAL is set)")
 else()
   message("== Cortex-M4F: running hstpf-m4f-fw.elf under qemu-system-arm -M mps2-an386")
-  execute_process(COMMAND ${QEMU_ARM} -M mps2-an386 -nographic -monitor none -serial none
-                          -semihosting-config enable=on,target=native -kernel "${_elf}"
+  execute_process(COMMAND ${QEMU_ARM} -M mps2-an386 -icount shift=0 -nographic -monitor none
+                          -serial none -semihosting-config enable=on,target=native
+                          -kernel "${_elf}"
                   RESULT_VARIABLE _qrc OUTPUT_VARIABLE _qout ERROR_VARIABLE _qerr
                   TIMEOUT 300)
   set(_qall "${_qout}${_qerr}")
@@ -420,6 +421,19 @@ else()
   if(_qall MATCHES "hstpf_init ([0-9]+) B, hstpf_step ([0-9]+) B")
     set(_qs_init ${CMAKE_MATCH_1})
     set(_qs_step ${CMAKE_MATCH_2})
+  endif()
+  # -icount shift=0: 1 virtual ns per instruction; SysTick at 25 MHz: 40
+  if(_qall MATCHES "timed pass: ([0-9]+) steps of ([0-9]+) models x ([0-9]+) particles in ([0-9]+) SysTick")
+    math(EXPR _q_ps "${CMAKE_MATCH_1} * ${CMAKE_MATCH_2} * ${CMAKE_MATCH_3}")
+    math(EXPR _q_instr "${CMAKE_MATCH_4} * 40")
+    math(EXPR _q_ips_x10 "(${_q_instr} * 10 + ${_q_ps} / 2) / ${_q_ps}")
+    math(EXPR _q_ips_i "${_q_ips_x10} / 10")
+    math(EXPR _q_ips_f "${_q_ips_x10} % 10")
+    set(_q_ips "${_q_ips_i}.${_q_ips_f}")
+    math(EXPR _q_step "${_q_instr} / ${CMAKE_MATCH_1}")
+    message("instructions executed in hstpf_step (QEMU -icount, +-40): ${_q_instr} for "
+            "${_q_ps} particle-steps = ${_q_ips} per particle-step, ${_q_step} per step of the bank "
+            "(instructions, not cycles: QEMU does not model the M4's timing)")
   endif()
   set(_qemu_summary "passed")
   if(HSTPF_HOST_DEMO AND EXISTS "${HSTPF_HOST_DEMO}")
@@ -463,6 +477,10 @@ string(APPEND _t "| stack, hstpf_init, library call graph (without libm) | ${_st
 if(DEFINED _qs_step)
   string(APPEND _t "| stack, hstpf_step, measured on QEMU (with libm) | ${_qs_step} |\n")
   string(APPEND _t "| stack, hstpf_init, measured on QEMU (with libm) | ${_qs_init} |\n")
+endif()
+if(DEFINED _q_ips)
+  string(APPEND _t "| instructions per particle-step, hstpf_step, 3x100 (QEMU -icount) | ${_q_ips} |\n")
+  string(APPEND _t "| instructions per bank step, 3x100 (QEMU -icount) | ${_q_step} |\n")
 endif()
 file(WRITE "${_md}" "Compiler: ${_gccver}; flags: ${_flags} -std=c99\n\n${_t}\nOn-target run: ${_qemu_summary}\n")
 message("summary written to ${_md}")

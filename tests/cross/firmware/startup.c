@@ -14,6 +14,51 @@ extern void __stack_top__(void);
 int main(void);
 void Reset_Handler(void);
 void Fault_Handler(void);
+void SysTick_Handler(void);
+
+/* ---- instruction counter: SysTick on the processor clock ----
+ * Under QEMU with -icount shift=0 the virtual clock advances 1 ns per
+ * instruction, and the mps2-an386 processor clock (the SysTick's source
+ * here) is 25 MHz: one SysTick count is 40 instructions. */
+#define SYST_CSR (*(volatile uint32_t *)0xE000E010u)
+#define SYST_RVR (*(volatile uint32_t *)0xE000E014u)
+#define SYST_CVR (*(volatile uint32_t *)0xE000E018u)
+#define SYST_RELOAD 0x00FFFFFFu
+
+static volatile uint32_t systick_wraps;
+
+void SysTick_Handler(void)
+{
+    ++systick_wraps;
+}
+
+void fw_ticks_start(void)
+{
+    SYST_CSR = 0u;
+    systick_wraps = 0u;
+    SYST_RVR = SYST_RELOAD;
+    SYST_CVR = 0u;
+    SYST_CSR = 7u; /* enable, interrupt on wrap, processor clock */
+    while (SYST_CVR == 0u) {
+        /* the first count loads the reload value; no wrap is counted */
+    }
+}
+
+uint64_t fw_ticks(void)
+{
+    uint32_t w0, w1, cvr;
+    do {
+        w0 = systick_wraps;
+        cvr = SYST_CVR;
+        w1 = systick_wraps;
+    } while (w0 != w1);
+    return (uint64_t)w0 * (SYST_RELOAD + 1u) + (SYST_RELOAD - (cvr & SYST_RELOAD));
+}
+
+void fw_ticks_stop(void)
+{
+    SYST_CSR = 0u;
+}
 
 #define SEMI_SYS_WRITE0 0x04u
 #define SEMI_SYS_EXIT 0x18u
@@ -68,5 +113,5 @@ void Reset_Handler(void)
 
 __attribute__((section(".isr_vector"), used)) static void (*const vectors[16])(void) = {
     __stack_top__,  Reset_Handler, Fault_Handler, Fault_Handler, Fault_Handler, Fault_Handler,
-    Fault_Handler, 0, 0, 0, 0, Fault_Handler, Fault_Handler, 0, Fault_Handler, Fault_Handler,
+    Fault_Handler, 0, 0, 0, 0, Fault_Handler, Fault_Handler, 0, Fault_Handler, SysTick_Handler,
 };
