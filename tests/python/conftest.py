@@ -16,11 +16,16 @@ def root() -> Path:
 
 @pytest.fixture(scope="session")
 def codec_dump(tmp_path_factory) -> str:
-    """The C frame dump program: $HSTPF_CODEC_DUMP (a CMake build of
-    tests/codec/codec_dump.c), else compiled here with the system cc."""
+    """The C frame dump program: $HSTPF_CODEC_DUMP, else the CMake build's
+    in $HSTPF_BUILD_DIR, else compiled here with the system cc."""
     exe = os.environ.get("HSTPF_CODEC_DUMP")
     if exe:
         return exe
+    build = os.environ.get("HSTPF_BUILD_DIR")
+    if build:
+        for rel in ("port/codec/tests/hstpf_codec_dump", "tests/codec/hstpf_codec_dump"):
+            if (Path(build) / rel).is_file():
+                return str(Path(build) / rel)
     cc = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler and no HSTPF_CODEC_DUMP")
