@@ -92,13 +92,17 @@ timeout -k 10 "$timeout_s" qemu-system-x86_64 \
     </dev/null >"$job/qemu.log" 2>&1 &
 qpid=$!
 
+# The firmware's terminal escapes, dropped from the console shown.
+unescape='s/\x1b\[[0-9;?]*[a-zA-Z]//g; s/\x1bc//g'
+
 # Stream CMD's output live; tail stops by itself once qemu is gone.
 tail -n +1 -F -s 0.2 --pid="$qpid" "$job/stdout" 2>/dev/null &
 tails+=($!)
 tail -n +1 -F -s 0.2 --pid="$qpid" "$job/stderr" >&2 2>/dev/null &
 tails+=($!)
 if [ "$debug" = 1 ]; then
-    tail -n +1 -F -s 0.2 --pid="$qpid" "$job/console.log" 2>/dev/null | sed 's/^/[vm] /' >&2 &
+    tail -n +1 -F -s 0.2 --pid="$qpid" "$job/console.log" 2>/dev/null |
+        sed -u "$unescape; s/^/[vm] /" >&2 &
     tails+=($!)
 fi
 
@@ -121,8 +125,7 @@ else
 fi
 if [ "$debug" != 1 ]; then
     log "last lines of the VM console (HSTPF_VM_DEBUG=1 shows it all):"
-    # Drop the firmware's terminal escapes; keep the text.
-    tail -n 30 "$job/console.log" | sed 's/\x1b\[[0-9;?]*[a-zA-Z]//g; s/\x1bc//g; s/^/[vm] /' >&2
+    tail -n 30 "$job/console.log" | sed "$unescape; s/^/[vm] /" >&2
 fi
 [ -s "$job/qemu.log" ] && sed 's/^/[qemu] /' "$job/qemu.log" >&2
 exit "$status"
