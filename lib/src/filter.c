@@ -158,6 +158,7 @@ static void reset_state(hstpf_t *f)
         m->s_mean = m->v_mean = m->loglik = 0;
         m->ess = (real)f->cfg.n_particles;
         m->floor_hits = 0;
+        m->floor_run = 0;
         m->track_hint = 0;
     }
     f->origin_m = 0.0;
@@ -266,6 +267,26 @@ static void first_fix(hstpf_t *f, double y)
         m->ess = (real)n;
     }
     f->have_fix = 1;
+}
+
+/* A model whose every particle has been at the floor for reacquire_after
+ * measurements has lost the train (its dynamics are wrong, or the train
+ * changed): its particles are drawn again at the fix, with the blended
+ * speed, so that it can recover if it becomes right. Its weight is kept. */
+static void model_reacquire(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+{
+    const uint16_t n = f->cfg.n_particles;
+    const real lw0 = (real)-log((double)n);
+    uint16_t i;
+    for (i = 0; i < n; ++i) {
+        m->s[i] = yr - hstpf__dist_sample(&f->de, hstpf__rng_next(&m->rng));
+        m->v[i] = v0 + (real)f->cfg.init_speed_sd * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
+        m->lw[i] = lw0;
+    }
+    m->s_mean = yr;
+    m->v_mean = v0;
+    m->floor_run = 0;
+    ++m->reacquired;
 }
 
 /* The cumulative count is clamped to [previous, n]; a particle of weight 0
@@ -418,6 +439,9 @@ static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
     }
     if (has_y && at_floor == n) {
         ++m->floor_hits;
+        ++m->floor_run;
+    } else if (has_y) {
+        m->floor_run = 0;
     }
     /* lw was normalised, so the log of the new sum is log sum W_i p(y|x_i) */
     inc = normalise(f, m, w);
@@ -552,13 +576,31 @@ static void update_declaration(hstpf_t *f, double dt)
     }
 }
 
-static double blended_position(const hstpf_t *f, double dt_ahead)
+/* Weights for blended estimates: q_l less the floor, normalised. The floor
+ * keeps a model able to recover; it must not let a model that lost the
+ * train pull the estimates. */
+static void blend_weights(const hstpf_t *f, double *wb)
 {
-    double s = 0.0;
+    double sum = 0.0;
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
+        const double q = exp(f->m[l].logq) - f->cfg.q_floor;
+        wb[l] = q > 0.0 ? q : 0.0;
+        sum += wb[l];
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        wb[l] = sum > 0.0 ? wb[l] / sum : 1.0 / (double)f->cfg.n_models;
+    }
+}
+
+static double blended_position(const hstpf_t *f, double dt_ahead)
+{
+    double s = 0.0, wb[HSTPF_MAX_MODELS];
+    uint16_t l;
+    blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        s += exp(m->logq) * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
+        s += wb[l] * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
     }
     return s;
 }
@@ -657,6 +699,18 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         if (has_y) {
             update_model_weights(f);
         }
+        if (has_y && f->cfg.model_reacquire_after > 0u) {
+            double wb[HSTPF_MAX_MODELS], vb = 0.0;
+            blend_weights(f, wb);
+            for (l = 0; l < f->cfg.n_models; ++l) {
+                vb += wb[l] * (double)f->m[l].v_mean;
+            }
+            for (l = 0; l < f->cfg.n_models; ++l) {
+                if (f->m[l].floor_run >= f->cfg.model_reacquire_after) {
+                    model_reacquire(f, &f->m[l], yr, (real)vb);
+                }
+            }
+        }
         for (l = 0; paired && l < f->cfg.n_models; ++l) {
             ess_mix += exp(f->m[l].logq) * (double)f->m[l].ess;
         }
@@ -686,16 +740,19 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->step = f->steps;
     out->time_s = f->time_s;
     out->n_models = f->cfg.n_models;
+    double wb[HSTPF_MAX_MODELS];
+    blend_weights(f, wb);
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        const double q = exp(m->logq);
+        const double q = wb[l];
         hstpf_model_out_t *o = &out->model[l];
-        o->q = (real)q;
+        o->q = (real)exp(m->logq);
         o->position_m = f->origin_m + (double)m->s_mean;
         o->speed_mps = m->v_mean;
         o->ess = m->ess;
         o->loglik = m->loglik;
         o->floor_hits = m->floor_hits;
+        o->reacquired = m->reacquired;
         v += q * (double)m->v_mean;
         th[0] += q * f->theta[l].c0;
         th[1] += q * f->theta[l].c1;

@@ -146,6 +146,13 @@ typedef struct {
      *  kept): a real jump of the position reference is re-acquired. 0 =
      *  never (5). */
     uint16_t reacquire_after;
+    /** A model whose every particle was at the likelihood floor for this
+     *  many measurements (it lost the train) is redrawn at the fix with the
+     *  blended speed, keeping its weight, so it can recover if the train or
+     *  its conditions change. Costs identification speed: a redrawn wrong
+     *  model challenges the right one for a while (docs/results.md). 0 =
+     *  never (0). */
+    uint16_t model_reacquire_after;
     const hstpf_track_seg_t *track; /**< optional profile, copied at init */
     uint16_t n_track;            /**< 0..HSTPF_MAX_TRACK_SEGMENTS */
 } hstpf_config_t;
@@ -173,15 +180,19 @@ typedef struct {
     hstpf_real_t ess;       /**< effective sample size after the update */
     hstpf_real_t loglik;    /**< last log-likelihood increment of the model */
     uint32_t floor_hits;    /**< steps where every particle was at the floor */
+    uint32_t reacquired;    /**< times the model lost the train and was redrawn */
 } hstpf_model_out_t;
 
 /** Snapshot of the estimate after a step. */
 typedef struct {
     uint32_t step;          /**< steps accepted so far */
     double time_s;          /**< sum of accepted step lengths */
-    double position_m;      /**< blended position sum_l q_l s_l, m */
+    /** Blended position sum_l b_l s_l, m, with b_l = (q_l - q_floor)+
+     *  normalised: a model at the floor does not pull the estimates. The
+     *  same b_l blend speed and theta. */
+    double position_m;
     hstpf_real_t speed_mps; /**< blended speed, m/s */
-    hstpf_real_t theta[3];  /**< sum_l q_l theta_l (Table 2, State A(1)) */
+    hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)) */
     hstpf_real_t resistance; /**< W(speed) with theta, N/kN */
     int16_t best;           /**< index of the largest q_l */
     int16_t declared;       /**< declared model index, -1 if none */
@@ -202,7 +213,8 @@ typedef struct {
     hstpf_real_t k0, k1, k2;              /* xi c0, xi c1 3.6, xi c2 3.6^2 */
     double logq;
     hstpf_real_t s_mean, v_mean, ess, loglik;
-    uint32_t floor_hits;
+    uint32_t floor_hits, reacquired;
+    uint16_t floor_run;                   /* consecutive all-floor steps */
     uint16_t track_hint;
 } hstpf_model_t;
 
