@@ -472,6 +472,13 @@ static int in_kink_cell(const hstpf_dist_spec_t *s, double a, double b)
 
 typedef struct {
     double lo, hi, dx, lpmax, floor, depth, sd;
+    /* where the library's node j lies relative to ours: within
+     * dlo + j * dnode (its own grid, found by its own quantile search, and
+     * rounded to the library's precision; bounded in check_grid) */
+    double dlo, dnode;
+    /* the library's lp_max (and so its floor, and a Gamma's first node for
+     * shape < 1, which is lp_max) relative to ours; bounded in check_grid */
+    double dlp;
 } grid_t;
 
 static void check_grid(const hstpf_dist_t *d, const hstpf_dist_spec_t *s, double sd, grid_t *g)
@@ -484,6 +491,8 @@ static void check_grid(const hstpf_dist_t *d, const hstpf_dist_spec_t *s, double
     /* the library's grid is the documented one */
     TU_CLOSE(d->lo, g->lo, 2.0 * TU_REAL_EPS * (fabs(g->lo) + g->hi - g->lo));
     TU_CLOSE(d->dx, g->dx, 1e-6 * g->dx + 2.0 * TU_REAL_EPS * g->dx);
+    g->dlo = fabs((double)d->lo - g->lo) + TU_REAL_EPS * (fabs(g->lo) + g->dx);
+    g->dnode = fabs((double)d->dx - g->dx) + TU_REAL_EPS * g->dx;
     g->lpmax = -HUGE_VAL;
     for (j = 0; j < LN; ++j) {
         const double v = node_lp(s, g->lo, g->dx, j);
@@ -491,6 +500,7 @@ static void check_grid(const hstpf_dist_t *d, const hstpf_dist_spec_t *s, double
     }
     g->floor = g->lpmax - g->depth;
     TU_CLOSE(d->lp_max, g->lpmax, 1e-6 * (1.0 + fabs(g->lpmax)));
+    g->dlp = fabs((double)d->lp_max - g->lpmax);
     TU_CLOSE(d->floor, g->floor, 1e-6 * (1.0 + fabs(g->floor)));
 }
 
@@ -517,12 +527,17 @@ static void check_inside(const hstpf_dist_t *d, const hstpf_dist_spec_t *s, cons
             /* float: t = (x - lo) / dx is found within 1.5 eps |x - lo| (three
              * roundings), so x within 2 eps (|x| + |lo|); the node values and
              * the interpolation are rounded within a few eps of their size */
-            const double slope = floor_cell || edge_cell ? 0.0 : fmax(exact_lp1(s, a), exact_lp1(s, b));
-            const double fl_tol = slope * 2.0 * eps * (fabs(x) + fabs(g->lo)) +
+            /* near a node the point may fall on either side of it: the
+             * previous cell's chord slope counts too */
+            const double chord_prev = j > 0 ? fabs(na - fmax(node_lp(s, g->lo, g->dx, j - 1), g->floor)) / g->dx : 0.0;
+            const double slope = floor_cell || edge_cell
+                                     ? 0.0
+                                     : fmax(fmax(exact_lp1(s, a), exact_lp1(s, b)), fr[p] == 0.0 ? chord_prev : 0.0);
+            const double fl_tol = g->dlp + slope * (2.0 * eps * (fabs(x) + fabs(g->lo)) + g->dlo + (j + 1) * g->dnode) +
                                   4.0 * eps * (1.0 + fabs(na > g->floor ? na : g->floor) +
                                                fabs(nb > g->floor ? nb : g->floor));
             assert_true(isfinite(got));
-            if (!(got >= g->floor - 4.0 * eps * (1.0 + fabs(g->floor)))) {
+            if (!(got >= g->floor - g->dlp - 4.0 * eps * (1.0 + fabs(g->floor)))) {
                 fail_msg("%s: log-density %g at %g below the floor %g", "inside", got, x, g->floor);
             }
             if (floor_cell || edge_cell || in_kink_cell(s, a, b) || x < a || x >= b) {
@@ -584,7 +599,8 @@ static void check_beyond(const hstpf_dist_t *d, const hstpf_dist_spec_t *s, cons
             const double slope = (8.0 + fabs(x - (side ? g->hi : g->lo)) / g->sd) / g->sd +
                                  fabs(s->kind == HSTPF_DIST_GAMMA ? 1.0 / s->scale : 0.0) +
                                  (s->edge_soft > 0.0 ? dd / (s->edge_soft * s->edge_soft) : 0.0);
-            const double tol = slope * 3.0 * TU_REAL_EPS * (fabs(x) + fabs(g->hi) + fabs(g->lo)) +
+            const double tol = g->dlp + slope * (3.0 * TU_REAL_EPS * (fabs(x) + fabs(g->hi) + fabs(g->lo)) + g->dlo +
+                                        (side ? (LN - 1) * g->dnode : 0.0)) +
                                8.0 * TU_REAL_EPS * (1.0 + fabs(want));
             if (!(fabs(got - want) <= tol)) {
                 fail_msg("%s side, %g sd beyond: log-density %.9g, expected %.9g +- %.3g", side ? "right" : "left",
