@@ -226,8 +226,8 @@ message("link test: hstpf-m4f-fw.elf links (newlib-nano, libm, nosys) with no he
 section_sums(_f "${_elf}")
 math(EXPR _f_flash "${_f_code} + ${_f_rodata} + ${_f_data}")
 math(EXPR _f_ram "${_f_data} + ${_f_bss}")
-message("  whole image: flash ${_f_flash} B (code+vectors ${_f_code}, rodata ${_f_rodata}, "
-        "data ${_f_data}); RAM ${_f_ram} B (data ${_f_data}, bss ${_f_bss}) + 16384 B stack")
+message("  whole image: flash ${_f_flash} B (vectors, code and constants ${_f_code}, .data "
+        "initialisers ${_f_data}); RAM ${_f_ram} B (data ${_f_data}, bss ${_f_bss}) + 16384 B stack")
 
 # Contributions by input library, from the map file (kept sections only).
 file(STRINGS "${_fwdir}/hstpf-m4f-fw.map" _map)
