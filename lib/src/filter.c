@@ -302,7 +302,7 @@ void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
         if (w[i] > (real)0) {
             c += w[i];
             last = i;
-            k = (int32_t)ceil(c * (real)n - u0);
+            k = (int32_t)ceil((double)(c * (real)n - u0));
             k = k < (int32_t)prev ? (int32_t)prev : (k > (int32_t)n ? (int32_t)n : k);
         }
         cnt[i] = (uint16_t)(k - (int32_t)prev);

@@ -15,8 +15,10 @@
  * probability at every node; between nodes the quantile is interpolated
  * linearly. Accuracy (tested): Kolmogorov-Smirnov distance between the
  * sampled and the exact CDF below 2e-3 for the Gaussian and for Gamma with
- * shape >= 0.02; sampled extremes reach the 2^-32 quantile (6.2 sd for a
- * Gaussian).
+ * shape >= 0.02 in the float build (the double build resolves quantiles
+ * below 1e-30 that a bin interpolates linearly across many decades: 3.3e-3
+ * for Gamma shape 0.02); sampled extremes reach the 2^-32 quantile (6.2 sd
+ * for a Gaussian).
  *
  * Log-density: HSTPF_DIST_LN nodes on a uniform grid over the body of the
  * distribution (Gaussian: mean +- 8 sd; Gamma: location to its 1 - 1e-9
@@ -29,9 +31,10 @@
  * table's ends) the value falls as a Gaussian of width edge_soft from the
  * edge value, or jumps straight to the floor when edge_soft is 0. The floor
  * is lp_max - floor_depth at the grid's edges and falls by 1 nat per
- * standard deviation of the distribution beyond them: never -inf or NaN,
- * and never flat, so particles far from a measurement are still ranked by
- * their distance. Inside the grid nothing is below lp_max - floor_depth.
+ * standard deviation of the distribution beyond them, up to 1e4 standard
+ * deviations (then constant, so nothing overflows): never -inf or NaN, so
+ * particles far from a measurement are still ranked by their distance.
+ * Inside the grid nothing is below lp_max - floor_depth.
  */
 #ifndef HSTPF_DIST_H
 #define HSTPF_DIST_H
@@ -121,8 +124,10 @@ hstpf_real_t hstpf_dist_logpdf(const hstpf_dist_t *d, hstpf_real_t x);
 
 /**
  * @brief exp(x) for x <= 0 from a 256-entry table of 2^(-j/256) with linear
- * interpolation and exponent scaling; relative error below 1e-6; returns 0
- * below -100 and 1 for x >= 0. Used for particle weights. Cost O(1).
+ * interpolation, Cody-Waite range reduction and exponent scaling; relative
+ * error below 1e-6 wherever the result is a normal float (x >= -87.3 in
+ * the float build); returns 0 below -100 and 1 for x >= 0. Used for
+ * particle weights. Cost O(1).
  */
 hstpf_real_t hstpf_exp_neg(hstpf_real_t x);
 
