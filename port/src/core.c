@@ -204,8 +204,11 @@ static void transmit(hstpfd_core_t *c, unsigned i)
         }
     }
     if (c->send != NULL && c->cfg->send) {
-        if (c->send(c->send_ctx, &f) == 0) {
+        const int r = c->send(c->send_ctx, &f);
+        if (r == 0) {
             ++c->n.tx_frames;
+        } else if (r == HSTPFD_SEND_OFFLINE) {
+            ++c->n.tx_offline;
         } else {
             ++c->n.tx_errors;
         }
@@ -635,6 +638,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     fputs("},\"io\":{", fp);
     kv(fp, "tx_frames", (unsigned long)c->n.tx_frames, 1);
     kv(fp, "tx_errors", (unsigned long)c->n.tx_errors, 0);
+    kv(fp, "tx_offline", (unsigned long)c->n.tx_offline, 0);
     kv(fp, "reopens", (unsigned long)c->n.reopens, 0);
     kv(fp, "read_errors", (unsigned long)c->n.read_errors, 0);
     fputs("}}\n", fp);

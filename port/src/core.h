@@ -13,8 +13,10 @@
 #include "frames.h"
 #include "sched.h"
 
-/* Sends one frame; returns 0, or < 0 if it was not sent (counted). */
+/* Sends one frame; returns 0, HSTPFD_SEND_OFFLINE if there is no open
+ * interface (counted apart), or another value < 0 if sending failed. */
 typedef int (*hstpfd_send_fn)(void *ctx, const hstpfd_frame_t *f);
+#define HSTPFD_SEND_OFFLINE (-2)
 
 typedef struct {
     uint32_t frames, ticks;
@@ -23,7 +25,7 @@ typedef struct {
     uint32_t err_class[HSTPFD_ERR_N_CLASSES];
     uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
     uint32_t degeneracy;
-    uint32_t tx_frames, tx_errors, tx_skipped;
+    uint32_t tx_frames, tx_errors, tx_offline, tx_skipped;
     /* filled by the I/O layer */
     uint32_t reopens, bad_lines, read_errors;
 } hstpfd_counts_t;

@@ -186,7 +186,7 @@ int hstpfd_iface_send(void *ctx, const hstpfd_frame_t *f)
     ssize_t n;
     (void)ctx;
     if (io.fd < 0) {
-        return -1;
+        return HSTPFD_SEND_OFFLINE;
     }
     memset(&cf, 0, sizeof cf);
     cf.can_id = (f->flags & HSTPFD_FRAME_EXT) ? ((f->id & CAN_EFF_MASK) | CAN_EFF_FLAG) : (f->id & CAN_SFF_MASK);

@@ -17,129 +17,14 @@
 #include "hstpf_can.h"
 #include "hstpf_e2e.h"
 #include "hstpf_frames.h"
-#include "hstpf_sim.h"
+#include "genlog.h"
 
 #define DIR HSTPFD_TEST_DIR
 #define MASS_T 500.0
-#define T0_US INT64_C(1700000000000000)
 
-typedef struct {
-    const char *path;
-    int duration_s;
-    int faults;      /* inject the fault plan below */
-    int time_div;    /* timestamps compressed this many times (a sped-up capture) */
-    uint64_t seed;
-} gen_t;
-
-static FILE *logf_;
-static int time_div_ = 1;
-
-static void put(int64_t t_us, uint32_t id, uint8_t flags, const uint8_t *d, uint8_t len)
+static void generate(const genlog_t *g)
 {
-    hstpfd_frame_t f;
-    char line[256];
-    memset(&f, 0, sizeof f);
-    f.t_us = T0_US + (t_us - T0_US) / time_div_;
-    f.id = id;
-    f.flags = flags;
-    f.len = len;
-    memcpy(f.data, d, len);
-    assert_true(hstpfd_candump_format(&f, "vcan0", line, sizeof line) > 0);
-    fputs(line, logf_);
-}
-
-/* The fault plan (gen_t.faults), by whole second k of the run. */
-static int in(int k, const int *set, int n)
-{
-    int i;
-    for (i = 0; i < n; ++i) {
-        if (set[i] == k) {
-            return 1;
-        }
-    }
-    return 0;
-}
-static const int bad_crc_pos[] = {100, 150, 200, 250, 300};
-static const int bad_crc_trac[] = {170, 270};
-static const int repeated_pos[] = {120, 220, 320};
-static const int short_pos[] = {130, 230};
-static const int unknown_at[] = {140, 141, 142, 143};
-static const int errframe_at[] = {160, 260};
-#define SILENCE_FROM 400 /* position frames lost in [400, 403) */
-#define SILENCE_TO 403
-
-/* Case 1 (CRH3, the paper's profile and noise) at 1 s, sent as 100 ms
- * frames: position at the whole second carries the measurement y_k, the
- * nine frames after it a straight line to y_k+1; traction u_k in all ten. */
-static void generate(const gen_t *g)
-{
-    hstpf_sim_config_t sc;
-    hstpf_sim_t sim;
-    hstpf_sim_sample_t cur, next;
-    hstpf_e2e_tx_t tx_pos, tx_trac;
-    int k, j;
-
-    logf_ = fopen(g->path, "w");
-    assert_non_null(logf_);
-    time_div_ = g->time_div;
-    hstpf_sim_default(&sc);
-    sc.seed = g->seed;
-    hstpf_sim_init(&sim, &sc);
-    (void)hstpf_e2e_tx_init(&tx_pos, HSTPF_FRAME_POSITION_DATA_ID);
-    (void)hstpf_e2e_tx_init(&tx_trac, HSTPF_FRAME_TRACTION_DATA_ID);
-    fputs("# hstpfd test log: Case 1, CRH3\n", logf_);
-    hstpf_sim_next(&sim, &cur);
-    for (k = 0; k < g->duration_s; ++k) {
-        hstpf_sim_next(&sim, &next);
-        for (j = 0; j < 10; ++j) {
-            const int64_t t = T0_US + (int64_t)k * 1000000 + (int64_t)j * 100000;
-            struct hstpf_can_position_t p;
-            struct hstpf_can_traction_t tr;
-            uint8_t d[8];
-            const double y = cur.y + (next.y - cur.y) * j / 10.0;
-            const int silent = g->faults && k >= SILENCE_FROM && k < SILENCE_TO;
-
-            (void)hstpf_can_position_init(&p);
-            p.pos_valid = 1;
-            p.pos_quality = 2;
-            p.position = hstpf_frames_position_position_raw(y);
-            assert_int_equal(hstpf_can_position_pack(d, &p, 8), 8);
-            (void)hstpf_e2e_protect(&tx_pos, d, 8);
-            if (!silent) {
-                if (g->faults && j == 0 && in(k, bad_crc_pos, 5)) {
-                    d[0] ^= 0x5A;
-                }
-                put(t, HSTPF_FRAME_POSITION_ID, 0, d, g->faults && j == 0 && in(k, short_pos, 2) ? 7 : 8);
-                if (g->faults && j == 0 && in(k, repeated_pos, 3)) {
-                    put(t + 1000, HSTPF_FRAME_POSITION_ID, 0, d, 8);
-                }
-            }
-            (void)hstpf_can_traction_init(&tr);
-            tr.tract_valid = 1;
-            tr.tract_force = hstpf_frames_traction_tract_force_raw(cur.u * MASS_T * 9.81 / 1000.0);
-            assert_int_equal(hstpf_can_traction_pack(d, &tr, 8), 8);
-            (void)hstpf_e2e_protect(&tx_trac, d, 8);
-            if (g->faults && j == 5 && in(k, bad_crc_trac, 2)) {
-                d[0] ^= 0x01;
-            }
-            put(t, HSTPF_FRAME_TRACTION_ID, 0, d, 8);
-            if (g->faults && j == 3 && in(k, unknown_at, 4)) {
-                static const uint8_t junk[8] = {1, 2, 3, 4, 5, 6, 7, 8};
-                put(t + 500, 0x1F0, 0, junk, 8);
-            }
-            if (g->faults && j == 7 && in(k, errframe_at, 2)) {
-                static const uint8_t zero[8] = {0};
-                put(t + 700, HSTPFD_ERR_BUSOFF | HSTPFD_ERR_CRTL, HSTPFD_FRAME_ERR, zero, 8);
-            }
-        }
-        if (g->faults && (k == 50 || k == 51 || k == 52)) {
-            fputs(k == 50 ? "this is not a frame\n" : k == 51 ? "(12.3 vcan0 100#00\n" : "(51.0) vcan0 XYZ#00\n",
-                  logf_);
-        }
-        cur = next;
-    }
-    fclose(logf_);
-    logf_ = NULL;
+    assert_int_equal(genlog(g), 0);
 }
 
 /* Runs hstpfd with args; returns its exit status. */
@@ -200,7 +85,7 @@ static int is(const char *section, const char *key, const char *text)
 
 static void test_clean_run(void **state)
 {
-    const gen_t g = {DIR "/clean.log", 600, 0, 1, 1};
+    const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T};
     char line[512];
     FILE *fp;
     int n = 0;
@@ -248,7 +133,7 @@ static void test_clean_run(void **state)
 
 static void test_faults_counted(void **state)
 {
-    const gen_t g = {DIR "/faults.log", 600, 1, 1, 1};
+    const genlog_t g = {DIR "/faults.log", 600, 1, 1, 1, MASS_T};
     (void)state;
     generate(&g);
     assert_int_equal(run("--log " DIR "/faults.log " MODELS " --summary " DIR "/faults.json > /dev/null"), 0);
@@ -282,7 +167,7 @@ static void test_deterministic_and_time_scale(void **state)
 {
     static char again[16384];
     double t1;
-    const gen_t g = {DIR "/fast.log", 600, 0, 10, 1};
+    const genlog_t g = {DIR "/fast.log", 600, 0, 10, 1, MASS_T};
     (void)state;
     assert_int_equal(run("--log " DIR "/clean.log " MODELS " --summary " DIR "/again.json > /dev/null"), 0);
     read_file(DIR "/clean.json", summary, sizeof summary);
@@ -342,6 +227,20 @@ static void test_output_frames(void **state)
     assert_int_equal(last_decl, 2); /* CRH3, Table 1 row 2 */
 }
 
+/* SIGINT while reading: a clean exit with the summary, end "signal". */
+static void test_signal(void **state)
+{
+    (void)state;
+    /* (sh's wait would wait for the whole pipeline, sleep included) */
+    assert_int_equal(system("(cat " DIR "/clean.log; sleep 2) 2>/dev/null | '" HSTPFD_BIN "' --log - " MODELS
+                            " --summary " DIR "/sig.json > /dev/null & pid=$!; sleep 0.5; kill -INT $pid;"
+                            " while kill -0 $pid 2>/dev/null; do sleep 0.05; done"),
+                     0);
+    read_file(DIR "/sig.json", summary, sizeof summary);
+    assert_true(is(NULL, "end", "\"signal\""));
+    assert_int_equal((int)num(NULL, "steps"), 600);
+}
+
 static void test_bad_configuration(void **state)
 {
     FILE *fp;
@@ -374,6 +273,7 @@ int main(void)
         cmocka_unit_test(test_faults_counted),
         cmocka_unit_test(test_deterministic_and_time_scale),
         cmocka_unit_test(test_output_frames),
+        cmocka_unit_test(test_signal),
         cmocka_unit_test(test_bad_configuration),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
