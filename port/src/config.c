@@ -85,6 +85,8 @@ static const key_t_ keys[] = {
     {"summary", K_PATH, OFF(summary), 0, 0, 0, "also write the final JSON summary line to this file"},
     {"frames_out", K_PATH, OFF(frames_out), 0, 0, 0,
      "write the estimate frames as a candump log (with --log: what would be sent)"},
+    {"frames_out_inputs", K_BOOL, OFF(frames_out_inputs), 0, 0, 0,
+     "1: frames_out also gets every received frame (a whole-bus recording)"},
 };
 
 #define N_KEYS (sizeof keys / sizeof keys[0])

@@ -54,6 +54,7 @@ typedef struct {
     hstpfd_out_format_t out_format;
     char summary[HSTPFD_PATH_MAX];
     char frames_out[HSTPFD_PATH_MAX];
+    uint8_t frames_out_inputs; /* also log every received frame */
 } hstpfd_config_t;
 
 /* Defaults (all 17 Table 1 types, paper Case 1 noise, ...). */

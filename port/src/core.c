@@ -196,7 +196,7 @@ static void transmit(hstpfd_core_t *c, unsigned i)
         ++c->n.tx_errors;
         return;
     }
-    f.t_us = c->t_now;
+    f.t_us = c->src_now; /* the source's clock, as a bus recording has it */
     if (c->frames_out != NULL) {
         char line[256];
         if (hstpfd_candump_format(&f, c->bus, line, sizeof line) > 0) {
@@ -341,8 +341,10 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
         ++c->n.step_err[(rc < 0 && rc >= -10) ? -rc : 0];
     }
     (void)hstpf_estimate(c->filt, &c->est);
+    /* degeneracy of the model we believe in: every particle of the leader at
+     * the likelihood floor (ruled-out models are there nearly always) */
     for (l = 0; l < c->est.n_models; ++l) {
-        if (c->est.model[l].floor_hits > c->floor_prev[l]) {
+        if (l == (uint16_t)c->est.best && c->est.model[l].floor_hits > c->floor_prev[l]) {
             degenerate = 1;
         }
         c->floor_prev[l] = c->est.model[l].floor_hits;
@@ -385,6 +387,7 @@ static void set_time(hstpfd_core_t *c, int64_t src)
 static void tick(hstpfd_core_t *c, int64_t src)
 {
     ++c->n.ticks;
+    c->src_now = src;
     set_time(c, src);
     hstpfd_sched_time(&c->sched, c->t_now);
     hstpfd_rx_poll(&c->rx, (uint32_t)(c->t_now / 1000));
@@ -397,6 +400,7 @@ static void start_time(hstpfd_core_t *c, int64_t src)
     c->have_time = 1;
     c->src0 = src;
     c->last_src = src;
+    c->src_now = src;
     c->t_first = c->t_now = frame_time(c, src);
     for (i = 0; i < HSTPFD_N_OUTPUTS; ++i) {
         c->next_tx[i] = c->t_first;
@@ -438,7 +442,16 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
         c->last_src = f->t_us;
     }
     ++c->n.frames;
+    if (f->t_us > c->src_now) {
+        c->src_now = f->t_us;
+    }
     set_time(c, f->t_us);
+    if (c->frames_out != NULL && c->cfg->frames_out_inputs) {
+        char line[256];
+        if (hstpfd_candump_format(f, c->bus, line, sizeof line) > 0) {
+            fputs(line, c->frames_out);
+        }
+    }
     now_ms = (uint32_t)(c->t_now / 1000);
     hstpfd_rx_decode(&c->rx, f, now_ms, &r);
     switch (r.kind) {

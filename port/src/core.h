@@ -45,6 +45,7 @@ typedef struct {
     /* time, microseconds; frame time = src0 + (source stamp - src0) x time_scale */
     uint8_t have_time;
     int64_t src0, t_first, t_now, last_src, tick_us;
+    int64_t src_now; /* latest source time seen (stamps of --frames-out) */
     int64_t next_tx[HSTPFD_N_OUTPUTS];
     uint8_t state_sent;
     int64_t last_state_tx;
