@@ -133,23 +133,16 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
     c->declared_prev = -1;
     (void)hstpf_estimate(filt, &c->est);
     if (out != NULL && cfg->out_format == HSTPFD_OUT_CSV) {
+        static const char *const pre[2] = {"q_", "ess_"};
+        int w;
         fputs("t,k,dt,u,y,err,pos,speed,c0,c1,c2,best,declared,status,pos_stale,trac_stale,restart", out);
-        for (l = 0; l < cfg->n_models; ++l) {
-            fputs(",", out);
-            fprintf(out, "\"q_");
-            {
-                const char *s;
-                for (s = cfg->models[l].name; *s != '\0'; ++s) {
-                    if (*s == '"') {
-                        fputc('"', out);
-                    }
-                    fputc(*s, out);
-                }
+        for (w = 0; w < 2; ++w) {
+            for (l = 0; l < cfg->n_models; ++l) {
+                char col[HSTPFD_NAME_MAX + 8];
+                (void)snprintf(col, sizeof col, "%s%s", pre[w], cfg->models[l].name);
+                fputc(',', out);
+                csv_str(out, col);
             }
-            fputc('"', out);
-        }
-        for (l = 0; l < cfg->n_models; ++l) {
-            fprintf(out, ",\"ess_%u\"", (unsigned)l);
         }
         fputc('\n', out);
     }

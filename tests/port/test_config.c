@@ -230,12 +230,39 @@ static void test_finish(void **state)
                      -1);
 }
 
+/* The example configurations under port/config load and pass the checks. */
+static void test_example_files(void **state)
+{
+    static const char *const files[] = {"case1.ini", "case2.ini", "train.ini"};
+    size_t i;
+    char path[1024];
+    (void)state;
+    for (i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        hstpfd_config_default(&cfg);
+        (void)snprintf(path, sizeof path, "%s/%s", HSTPFD_CONFIG_DIR, files[i]);
+        if (hstpfd_config_load(&cfg, path, err, sizeof err) != 0) {
+            fail_msg("%s", err);
+        }
+        if (cfg.iface[0] == '\0') {
+            assert_int_equal(hstpfd_config_set(&cfg, "log", "run.log", err, sizeof err), 0);
+        }
+        if (hstpfd_config_finish(&cfg, err, sizeof err) != 0) {
+            fail_msg("%s: %s", files[i], err);
+        }
+    }
+    assert_int_equal(cfg.n_models, 7);
+    assert_string_equal(cfg.models[6].name, "Depot-EMU-7");
+    assert_int_equal(cfg.noise_e.kind, HSTPF_DIST_GAMMA);
+    assert_int_equal(cfg.out_format, HSTPFD_OUT_CSV);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),   cmocka_unit_test(test_set_numbers), cmocka_unit_test(test_enums),
         cmocka_unit_test(test_noise),      cmocka_unit_test(test_models),      cmocka_unit_test(test_lines),
         cmocka_unit_test(test_file_and_write), cmocka_unit_test(test_finish),
+        cmocka_unit_test(test_example_files),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
