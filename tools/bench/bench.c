@@ -34,6 +34,14 @@
 #define HSTPF_BENCH_LIB "hstpf"
 #endif
 
+#if defined(__clang__)
+#define COMPILER "clang " __clang_version__
+#elif defined(__GNUC__)
+#define COMPILER "gcc " __VERSION__
+#else
+#define COMPILER "unknown compiler"
+#endif
+
 #define MAX_CONFIGS 16
 #define MAX_RUNS 101
 #define TARGET_NS 15.0
@@ -244,7 +252,7 @@ int main(int argc, char **argv)
 
     if (json) {
         printf("{\n  \"compiler\": \"%s\",\n  \"build_type\": \"%s\",\n  \"flags\": \"%s\",\n",
-               __VERSION__, HSTPF_BENCH_BUILD_TYPE, HSTPF_BENCH_FLAGS);
+               COMPILER, HSTPF_BENCH_BUILD_TYPE, HSTPF_BENCH_FLAGS);
         printf("  \"library\": \"%s\",\n  \"capacity\": {\"models\": %d, \"particles\": %d},\n",
                HSTPF_BENCH_LIB, HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES);
         printf("  \"real\": \"%s\",\n  \"steps\": %u,\n  \"runs\": %u,\n  \"min_time_s\": %g,\n",
@@ -279,8 +287,8 @@ int main(int argc, char **argv)
     }
 
     printf("hstpf-bench: hstpf_step() on the paper's Case 1 inputs (%u steps), one thread\n", steps);
-    printf("compiler: gcc-compatible %s; build %s; flags: %s\n", __VERSION__,
-           HSTPF_BENCH_BUILD_TYPE, HSTPF_BENCH_FLAGS);
+    printf("compiler: %s; build %s; flags: %s\n", COMPILER, HSTPF_BENCH_BUILD_TYPE,
+           HSTPF_BENCH_FLAGS);
     printf("library: %s (HSTPF_MAX_MODELS %d, HSTPF_MAX_PARTICLES %d, %s)\n", HSTPF_BENCH_LIB,
            HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES, sizeof(hstpf_real_t) == 4 ? "float" : "double");
     printf("%u runs per configuration after a warm-up, each >= %.2f s of hstpf_step()\n\n", runs,
