@@ -677,12 +677,27 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->gate_m = c->gate_m;
 }
 
+/* The shortest of %.15g, %.16g, %.17g that reads back as x. */
+static const char *g17(double x, char *buf, size_t size)
+{
+    int p;
+    for (p = 15; p <= 17; ++p) {
+        (void)snprintf(buf, size, "%.*g", p, x);
+        if (strtod(buf, NULL) == x) {
+            break;
+        }
+    }
+    return buf;
+}
+
 static int noise_text(const hstpf_dist_spec_t *d, char *buf, size_t size)
 {
+    char a[32], b[32], c[32];
     if (d->kind == HSTPF_DIST_GAMMA) {
-        return snprintf(buf, size, "gamma:%.17g:%.17g:%.17g", d->shape, d->scale, d->loc);
+        return snprintf(buf, size, "gamma:%s:%s:%s", g17(d->shape, a, sizeof a), g17(d->scale, b, sizeof b),
+                        g17(d->loc, c, sizeof c));
     }
-    return snprintf(buf, size, "gaussian:%.17g:%.17g", d->mean, d->sd);
+    return snprintf(buf, size, "gaussian:%s:%s", g17(d->mean, a, sizeof a), g17(d->sd, b, sizeof b));
 }
 
 int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
@@ -728,7 +743,7 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
         case K_DBL: {
             double x;
             memcpy(&x, base + k->off, sizeof x);
-            PUT("%s = %.17g\n", k->name, x);
+            PUT("%s = %s\n", k->name, g17(x, tmp, sizeof tmp));
             break;
         }
         case K_BOOL:
@@ -744,7 +759,9 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
                     hstpf_train_types[row].c2 == t->c2) {
                     PUT("%s%s", m ? ", " : "", c->model_name[m]);
                 } else {
-                    PUT("%s%s:%.17g:%.17g:%.17g", m ? ", " : "", c->model_name[m], t->c0, t->c1, t->c2);
+                    char a[32], b[32], d[32];
+                    PUT("%s%s:%s:%s:%s", m ? ", " : "", c->model_name[m], g17(t->c0, a, sizeof a),
+                        g17(t->c1, b, sizeof b), g17(t->c2, d, sizeof d));
                 }
             }
             PUT("\n");
