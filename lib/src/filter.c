@@ -302,7 +302,9 @@ void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
         if (w[i] > (real)0) {
             c += w[i];
             last = i;
-            k = (int32_t)ceil((double)(c * (real)n - u0));
+            const real x = c * (real)n - u0; /* > -1 */
+            k = (int32_t)x;                  /* ceil without libm: */
+            k += (real)k < x ? 1 : 0;        /* a double call on an M4 */
             k = k < (int32_t)prev ? (int32_t)prev : (k > (int32_t)n ? (int32_t)n : k);
         }
         cnt[i] = (uint16_t)(k - (int32_t)prev);
@@ -386,27 +388,36 @@ static void roughen(hstpf_t *f, hstpf_model_t *m)
     }
 }
 
-/* Normalises m->lw; the linear weights go to w. Returns log of the sum
- * before normalising (the likelihood increment when lw held lw + l). */
-static real normalise(const hstpf_t *f, hstpf_model_t *m, real *w)
+/* Normalises m->lw, whose maximum is lmax; the linear weights go to w.
+ * Returns log of the sum before normalising (the likelihood increment when
+ * lw held lw + l). */
+static real normalise(const hstpf_t *f, hstpf_model_t *m, real *w, real lmax)
 {
     const uint16_t n = f->cfg.n_particles;
-    real lmax = m->lw[0], sum = 0, lsum;
+    real sum = 0, lsum, inv;
     uint16_t i;
-    for (i = 1; i < n; ++i) {
-        lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
-    }
     for (i = 0; i < n; ++i) {
         w[i] = hstpf__exp_neg(m->lw[i] - lmax);
         sum += w[i];
     }
     /* sum >= 1: the best particle contributes exp(0) */
     lsum = lmax + (real)log((double)sum);
+    inv = (real)1 / sum;
     for (i = 0; i < n; ++i) {
         m->lw[i] -= lsum;
-        w[i] /= sum;
+        w[i] *= inv;
     }
     return lsum;
+}
+
+static real max_of(const real *x, uint16_t n)
+{
+    real mx = x[0];
+    uint16_t i;
+    for (i = 1; i < n; ++i) {
+        mx = x[i] > mx ? x[i] : mx;
+    }
+    return mx;
 }
 
 /* One model: propagate with the drawn noise, weight by the measurement,
@@ -415,7 +426,7 @@ static real normalise(const hstpf_t *f, hstpf_model_t *m, real *w)
 static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has_y, real yr, real *w)
 {
     const uint16_t n = f->cfg.n_particles;
-    real sw2 = 0, ms = 0, mv = 0, inc = 0;
+    real sw2 = 0, ms = 0, mv = 0, inc = 0, lmax = (real)-3e38;
     uint16_t i, at_floor = 0;
     const int track = f->cfg.n_track > 0u;
 
@@ -436,6 +447,7 @@ static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
             at_floor = (uint16_t)(at_floor + (l <= f->de.floor));
             m->lw[i] += l;
         }
+        lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
     }
     if (has_y && at_floor == n) {
         ++m->floor_hits;
@@ -444,7 +456,7 @@ static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
         m->floor_run = 0;
     }
     /* lw was normalised, so the log of the new sum is log sum W_i p(y|x_i) */
-    inc = normalise(f, m, w);
+    inc = normalise(f, m, w, lmax);
     for (i = 0; i < n; ++i) {
         sw2 += w[i] * w[i];
         ms += w[i] * m->s[i];
@@ -512,7 +524,7 @@ static void resample_paired(hstpf_t *f)
     }
     for (l = 0; l < nm; ++l) {
         hstpf_model_t *m = &f->m[l];
-        (void)normalise(f, m, a);
+        (void)normalise(f, m, a, max_of(m->lw, n));
         if (roughening_on(f)) {
             roughen(f, m);
         }
