@@ -8,7 +8,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
 debs=(cmake ninja-build gcc libc6-dev make pkg-config libcmocka-dev
       gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
-      qemu-system-x86 busybox-static cpio kmod iproute2
+      qemu-system-x86 qemu-system-arm busybox-static cpio kmod iproute2
       python3 python3-venv python3-pip)
 missing=()
 for p in "${debs[@]}"; do

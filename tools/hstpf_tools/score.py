@@ -52,14 +52,24 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     """Decoded output series with simulation times."""
     series: Dict[str, List] = {EST_STATE: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [], HEALTH_SYS: []}
     t_sim: Optional[float] = None
+    t_in: Optional[float] = None  # bus time of the latest matched input
     e2e_results: Dict[str, Dict[str, int]] = {}
+    rec_msgs = list(rec_msgs)
+    pos_id = codec.message(POSITION).frame_id
+    # An output frame long after the latest input (the inputs ended, or a
+    # silence) holds a prediction, not the estimate at that input's time:
+    # with inputs alignment it cannot be timed, so it is not scored.
+    in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
+    gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
+    max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
     for m in rec_msgs:
         if m.is_error_frame:
             continue
-        if m.arbitration_id == codec.message(POSITION).frame_id:
+        if m.arbitration_id == pos_id:
             t = input_map.get(bytes(m.data))
             if t is not None:
                 t_sim = t
+                t_in = m.timestamp
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
@@ -70,6 +80,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             continue
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
         if t is None:
+            continue
+        if align == "inputs" and name == EST_STATE and t_in is not None and m.timestamp - t_in > max_age:
             continue
         series[name].append((t, sig))
     return series, e2e_results
