@@ -234,57 +234,68 @@ int32_t hstpf_reset(hstpf_t *f)
     return HSTPF_OK;
 }
 
-/* Particles from the first fix: s = y - e_i, so that the prior is the
- * measurement's own posterior; v from the speed prior. The paired bank
- * gives every model the same particles. */
-static void first_fix(hstpf_t *f, double y)
+/* Draws for a cloud at a fix: measurement-noise samples into nz_s and unit
+ * Gaussians into nz_v, interleaved per particle. */
+static void draw_fix(hstpf_t *f, hstpf_rng_t *rng)
 {
-    uint16_t l, i;
+    uint16_t i;
+    for (i = 0; i < f->cfg.n_particles; ++i) {
+        f->nz_s[i] = hstpf__dist_sample(&f->de, hstpf__rng_next(rng));
+        f->nz_v[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+    }
+}
+
+/* A cloud at the fix yr from the draws: s = yr - e_i, so that the prior is
+ * the measurement's own posterior; v = v0 + init_speed_sd z_i; equal weights. */
+static void place_cloud(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+{
     const uint16_t n = f->cfg.n_particles;
     const real lw0 = (real)-log((double)n);
+    double ss = 0.0, sv = 0.0;
+    uint16_t i;
+    for (i = 0; i < n; ++i) {
+        m->s[i] = yr - f->nz_s[i];
+        m->v[i] = v0 + (real)f->cfg.init_speed_sd * f->nz_v[i];
+        m->lw[i] = lw0;
+        ss += (double)m->s[i];
+        sv += (double)m->v[i];
+    }
+    m->s_mean = (real)(ss / n);
+    m->v_mean = (real)(sv / n);
+    m->ess = (real)n;
+}
+
+/* Particles from the first fix, with the speed prior. The paired bank gives
+ * every model the same particles. */
+static void first_fix(hstpf_t *f, double y)
+{
+    uint16_t l;
     const int paired = f->cfg.bank == HSTPF_BANK_PAIRED;
+    real yr;
     f->origin_m = floor(y);
+    yr = (real)(y - f->origin_m);
     track_rebase(f);
+    if (paired) {
+        draw_fix(f, &f->rng);
+    }
     for (l = 0; l < f->cfg.n_models; ++l) {
-        hstpf_model_t *m = &f->m[l];
-        hstpf_rng_t *rng = paired ? &f->rng : &m->rng;
-        double ss = 0.0, sv = 0.0;
-        if (!paired || l == 0u) {
-            for (i = 0; i < n; ++i) {
-                f->nz_s[i] = hstpf__dist_sample(&f->de, hstpf__rng_next(rng));
-                f->nz_v[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
-            }
+        if (!paired) {
+            draw_fix(f, &f->m[l].rng);
         }
-        for (i = 0; i < n; ++i) {
-            m->s[i] = (real)(y - f->origin_m) - f->nz_s[i];
-            m->v[i] = (real)f->cfg.init_speed_mps + (real)f->cfg.init_speed_sd * f->nz_v[i];
-            m->lw[i] = lw0;
-            ss += (double)m->s[i];
-            sv += (double)m->v[i];
-        }
-        m->s_mean = (real)(ss / n);
-        m->v_mean = (real)(sv / n);
-        m->ess = (real)n;
+        place_cloud(f, &f->m[l], yr, (real)f->cfg.init_speed_mps);
     }
     f->have_fix = 1;
 }
 
-/* A model whose every particle has been at the floor for reacquire_after
- * measurements has lost the train (its dynamics are wrong, or the train
- * changed): its particles are drawn again at the fix, with the blended
- * speed, so that it can recover if it becomes right. Its weight is kept. */
+/* A model whose every particle has been at the floor for
+ * model_reacquire_after measurements has lost the train (its dynamics are
+ * wrong, or the train changed): its particles are drawn again at the fix,
+ * with the blended speed, so that it can recover if it becomes right. Its
+ * weight is kept. */
 static void model_reacquire(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
 {
-    const uint16_t n = f->cfg.n_particles;
-    const real lw0 = (real)-log((double)n);
-    uint16_t i;
-    for (i = 0; i < n; ++i) {
-        m->s[i] = yr - hstpf__dist_sample(&f->de, hstpf__rng_next(&m->rng));
-        m->v[i] = v0 + (real)f->cfg.init_speed_sd * hstpf__dist_sample(&f->unit, hstpf__rng_next(&m->rng));
-        m->lw[i] = lw0;
-    }
-    m->s_mean = yr;
-    m->v_mean = v0;
+    draw_fix(f, &m->rng);
+    place_cloud(f, m, yr, v0);
     m->floor_run = 0;
     ++m->reacquired;
 }
@@ -421,9 +432,9 @@ static real max_of(const real *x, uint16_t n)
 }
 
 /* One model: propagate with the drawn noise, weight by the measurement,
- * estimate. Returns the log-likelihood increment (0 without a measurement);
- * the normalised weights are left in w. */
-static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has_y, real yr, real *w)
+ * estimate. The log-likelihood increment goes to m->loglik (0 without a
+ * measurement); the normalised weights are left in w. */
+static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has_y, real yr, real *w)
 {
     const uint16_t n = f->cfg.n_particles;
     real sw2 = 0, ms = 0, mv = 0, inc = 0, lmax = (real)-3e38;
@@ -471,7 +482,6 @@ static real model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
         inc = hstpf__dist_logpdf(&f->de, yr - ms);
     }
     m->loglik = inc;
-    return inc;
 }
 
 /* Independent bank: each model resamples on its own weights and stream. */
@@ -703,7 +713,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             if (!paired) {
                 draw_noise(f, &m->rng, scale);
             }
-            (void)model_update(f, m, dt, xu, has_y, yr, f->scratch);
+            model_update(f, m, dt, xu, has_y, yr, f->scratch);
             if (!paired && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < thr)) {
                 resample_own(f, m, f->scratch);
             }
