@@ -27,9 +27,9 @@ static void test_long_run_blend(void **state)
         hstpf_sim_t sim;
         hstpf_sim_sample_t smp;
         hstpf_estimate_t est;
-        double u_prev = 0.0, se_blend = 0.0, se_decl = 0.0, worst_lost = 0.0;
+        double se_blend = 0.0, se_decl = 0.0, worst_lost = 0.0;
         long n = 0;
-        int i, first = 1;
+        int i;
         for (i = 0; i < 3; ++i) {
             models[i] = hstpf_train_types[hstpf_train_type_find(names[i])];
         }
@@ -49,14 +49,8 @@ static void test_long_run_blend(void **state)
         hstpf_sim_init(&sim, &sc);
         while (sim.t <= 3600.0) {
             hstpf_input_t in;
-            hstpf_sim_next(&sim, &smp);
-            in.dt_s = first ? 1.0 : sc.dt_s;
-            in.traction = u_prev;
-            in.position_m = smp.y;
-            in.has_position = (uint8_t)smp.has_y;
+            hstpf_sim_next_input(&sim, &smp, &in);
             assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
-            u_prev = smp.u;
-            first = 0;
             assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
             if (smp.t > 600.0 && est.declared >= 0) {
                 const double eb = est.position_m - smp.s, ed = est.model[est.declared].position_m - smp.s;

@@ -78,9 +78,9 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
     hstpf_estimate_t est;
-    double u_prev = 0.0, se2 = 0.0;
+    double se2 = 0.0;
     long n_rms = 0;
-    int first = 1, i, truth_declared = 0;
+    int i, truth_declared = 0;
 
     memset(res, 0, sizeof *res);
     res->decision_time_s = -1.0;
@@ -110,18 +110,12 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
     while (sim.t <= DURATION_S) {
         hstpf_input_t in;
         int32_t err;
-        hstpf_sim_next(&sim, &smp);
-        in.dt_s = first ? 1.0 : sc.dt_s;
-        in.traction = u_prev; /* the force applied over the step just ended */
-        in.position_m = smp.y;
-        in.has_position = (uint8_t)smp.has_y;
+        hstpf_sim_next_input(&sim, &smp, &in); /* traction of the step just ended */
         err = hstpf_step(&filt, &in);
         if (err != HSTPF_OK && res->err == 0) {
             res->err = err;
             res->err_t = smp.t;
         }
-        u_prev = smp.u;
-        first = 0;
         assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
         if (smp.t > RMS_FROM_S) {
             se2 += (est.position_m - smp.s) * (est.position_m - smp.s);

@@ -154,7 +154,6 @@ int main(int argc, char **argv)
     hstpf_sim_config_t sc;
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    double u_prev = 0.0;
 
     memset(res, 0, sizeof res);
     for (i = 1; i < (unsigned)argc; ++i) {
@@ -203,12 +202,7 @@ int main(int argc, char **argv)
     hstpf_sim_default(&sc);
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k < steps; ++k) {
-        hstpf_sim_next(&sim, &smp);
-        in[k].dt_s = k == 0u ? 1.0 : sc.dt_s;
-        in[k].traction = u_prev;
-        in[k].position_m = smp.y;
-        in[k].has_position = (uint8_t)smp.has_y;
-        u_prev = smp.u;
+        hstpf_sim_next_input(&sim, &smp, &in[k]);
     }
 
     for (i = 0; i < n_cfg; ++i) {

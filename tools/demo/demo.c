@@ -79,21 +79,13 @@ int main(int argc, char **argv)
     printf("%8s %10s %8s %8s %8s %8s  %s\n", "t [s]", "s [m]", "v [km/h]", "q1", "q2", "q3", "declared");
     {
         hstpf_sim_sample_t smp;
-        double u_prev = 0.0;
-        int first = 1;
         while (sim.t <= duration) {
             hstpf_input_t in;
-            hstpf_sim_next(&sim, &smp);
-            in.dt_s = first ? 1.0 : sc.dt_s;
-            in.traction = u_prev;
-            in.position_m = smp.y;
-            in.has_position = (uint8_t)smp.has_y;
+            hstpf_sim_next_input(&sim, &smp, &in);
             err = hstpf_step(&filt, &in);
             if (err != HSTPF_OK) {
                 fprintf(stderr, "t=%.0f: hstpf_step: %s\n", smp.t, hstpf_strerror(err));
             }
-            u_prev = smp.u;
-            first = 0;
             (void)hstpf_estimate(&filt, &est);
             if (smp.t >= next_print) {
                 printf("%8.0f %10.1f %8.1f %8.4f %8.4f %8.4f  %s\n", smp.t, est.position_m,

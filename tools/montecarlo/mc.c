@@ -94,9 +94,9 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     hstpf_sim_t sim;
     hstpf_estimate_t est;
     hstpf_sim_sample_t smp;
-    double u_prev = 0.0, last_below = 0.0, se_p = 0.0, se_v = 0.0;
+    double last_below = 0.0, se_p = 0.0, se_v = 0.0;
     long n_err = 0;
-    int first = 1, k;
+    int k;
     if (f == NULL) {
         fprintf(stderr, "out of memory\n");
         exit(1);
@@ -150,16 +150,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     while (sim.t <= w->sc->duration_s) {
         hstpf_input_t in;
         double qt;
-        hstpf_sim_next(&sim, &smp);
-        in.dt_s = first ? 1.0 : sc.dt_s;
-        in.traction = u_prev;
-        in.position_m = smp.y;
-        in.has_position = (uint8_t)smp.has_y;
+        hstpf_sim_next_input(&sim, &smp, &in);
         if (hstpf_step(f, &in) != HSTPF_OK) {
             ++n_err;
         }
-        u_prev = smp.u;
-        first = 0;
         (void)hstpf_estimate(f, &est);
         qt = (double)est.model[truth].q;
         if (!(qt > thr)) {

@@ -187,3 +187,13 @@ void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *o)
     sim->t += c->dt_s;
     ++sim->k;
 }
+
+void hstpf_sim_next_input(hstpf_sim_t *sim, hstpf_sim_sample_t *smp, hstpf_input_t *in)
+{
+    in->dt_s = sim->k == 0u ? 1.0 : sim->cfg.dt_s;
+    hstpf_sim_next(sim, smp);
+    in->traction = sim->u_prev;
+    in->position_m = smp->y;
+    in->has_position = (uint8_t)smp->has_y;
+    sim->u_prev = smp->u;
+}

@@ -36,9 +36,14 @@ typedef struct {
     hstpf_sim_config_t cfg;
     hstpf_rng_t rng;
     double xi, t, s, v;
+    double u_prev;    /* traction of the step just ended */
     uint32_t k;
 } hstpf_sim_t;
 
+/* The sample at the current time as the filter's input, then advances one
+ * step: the traction is the one applied over the step just ended, the
+ * first step's length is 1 s (no step precedes it). */
+void hstpf_sim_next_input(hstpf_sim_t *sim, hstpf_sim_sample_t *smp, hstpf_input_t *in);
 /* Paper Case 1 / Case 2 noise into a config (truth and profile untouched). */
 void hstpf_sim_case1(hstpf_sim_config_t *c);
 void hstpf_sim_case2(hstpf_sim_config_t *c);

@@ -120,7 +120,6 @@ int main(void)
     hstpf_sim_sample_t smp;
     hstpf_estimate_t est;
     char line[160], *p;
-    double u_prev = 0.0;
     uint32_t k, ok = 0u, stack_init, stack_step;
     uint32_t *sp;
     int32_t err = HSTPF_OK, i;
@@ -146,12 +145,7 @@ int main(void)
     /* the simulated inputs first, so that only the estimator runs below */
     hstpf_sim_init(&sim, &sc);
     for (k = 0u; k < N_STEPS; ++k) {
-        hstpf_sim_next(&sim, &smp);
-        inputs[k].dt_s = k == 0u ? 1.0 : sc.dt_s;
-        inputs[k].traction = u_prev;
-        inputs[k].position_m = smp.y;
-        inputs[k].has_position = (uint8_t)smp.has_y;
-        u_prev = smp.u;
+        hstpf_sim_next_input(&sim, &smp, &inputs[k]);
     }
 
     sp = stack_pointer();
