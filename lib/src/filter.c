@@ -26,6 +26,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     memset(cfg, 0, sizeof *cfg);
     cfg->n_particles = 100;
     cfg->seed = 1;
+    cfg->engine = HSTPF_ENGINE_AUTO;
     cfg->bank = HSTPF_BANK_INDEPENDENT;
     cfg->gamma_rot = 0.06;
     cfg->noise_s.kind = HSTPF_DIST_GAUSSIAN;
@@ -42,7 +43,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->roughening_k = 0.2;
     cfg->weight_method = HSTPF_WEIGHT_MARGINAL;
     cfg->q_floor = 1e-6;
-    cfg->declare_threshold = 0.9;
+    cfg->declare_threshold = 0.99;
     cfg->declare_hold_s = 30.0;
     cfg->gate_m = 1000.0;
     cfg->reacquire_after = 5;
@@ -58,6 +59,12 @@ static int32_t check_theta(const hstpf_theta_t *t)
         return HSTPF_E_RANGE;
     }
     return HSTPF_OK;
+}
+
+static int all_gaussian(const hstpf_config_t *c)
+{
+    return c->noise_s.kind == HSTPF_DIST_GAUSSIAN && c->noise_v.kind == HSTPF_DIST_GAUSSIAN &&
+           c->noise_e.kind == HSTPF_DIST_GAUSSIAN;
 }
 
 static int32_t check_config(const hstpf_config_t *c)
@@ -89,7 +96,10 @@ static int32_t check_config(const hstpf_config_t *c)
         c->init_speed_sd < 0.0 || c->init_speed_sd > HSTPF_SPEED_MAX) {
         return HSTPF_E_RANGE;
     }
-    if ((c->bank != HSTPF_BANK_INDEPENDENT && c->bank != HSTPF_BANK_PAIRED) || (c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
+    if ((c->engine != HSTPF_ENGINE_PARTICLE && c->engine != HSTPF_ENGINE_KALMAN &&
+         c->engine != HSTPF_ENGINE_AUTO) ||
+        (c->engine == HSTPF_ENGINE_KALMAN && !all_gaussian(c)) ||
+        (c->bank != HSTPF_BANK_INDEPENDENT && c->bank != HSTPF_BANK_PAIRED) || (c->resample != HSTPF_RESAMPLE_ALWAYS && c->resample != HSTPF_RESAMPLE_ESS) ||
         (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) ||
         !(c->ess_threshold > 0.0 && c->ess_threshold <= 1.0) || c->roughening_k < 0.0 ||
         c->roughening_k > 10.0 || c->rough_min_s < 0.0 || c->rough_min_v < 0.0 ||
@@ -192,6 +202,8 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     f->cfg.models = NULL; /* copied below: the caller's arrays need not live on */
     f->cfg.track = NULL;
     f->xi = G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
+    f->kalman = (uint8_t)(cfg->engine == HSTPF_ENGINE_KALMAN ||
+                          (cfg->engine == HSTPF_ENGINE_AUTO && all_gaussian(cfg)));
     for (l = 0; l < cfg->n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         f->theta[l] = cfg->models[l];
@@ -253,6 +265,19 @@ static void place_cloud(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
     const real lw0 = (real)-log((double)n);
     double ss = 0.0, sv = 0.0;
     uint16_t i;
+    if (f->kalman) {
+        /* the same prior as the cloud's, as a Gaussian */
+        const double sde = f->cfg.noise_e.sd, sdv = f->cfg.init_speed_sd;
+        m->kx[0] = (double)yr - f->cfg.noise_e.mean;
+        m->kx[1] = (double)v0;
+        m->kp[0] = sde * sde;
+        m->kp[1] = 0.0;
+        m->kp[2] = sdv * sdv;
+        m->s_mean = (real)m->kx[0];
+        m->v_mean = (real)m->kx[1];
+        m->ess = (real)n;
+        return;
+    }
     for (i = 0; i < n; ++i) {
         m->s[i] = yr - f->nz_s[i];
         m->v[i] = v0 + (real)f->cfg.init_speed_sd * f->nz_v[i];
@@ -275,11 +300,11 @@ static void first_fix(hstpf_t *f, double y)
     f->origin_m = floor(y);
     yr = (real)(y - f->origin_m);
     track_rebase(f);
-    if (paired) {
+    if (paired && !f->kalman) {
         draw_fix(f, &f->rng);
     }
     for (l = 0; l < f->cfg.n_models; ++l) {
-        if (!paired) {
+        if (!paired && !f->kalman) {
             draw_fix(f, &f->m[l].rng);
         }
         place_cloud(f, &f->m[l], yr, (real)f->cfg.init_speed_mps);
@@ -294,7 +319,9 @@ static void first_fix(hstpf_t *f, double y)
  * weight is kept. */
 static void model_reacquire(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
 {
-    draw_fix(f, &m->rng);
+    if (!f->kalman) {
+        draw_fix(f, &m->rng);
+    }
     place_cloud(f, m, yr, v0);
     m->floor_run = 0;
     ++m->reacquired;
@@ -484,6 +511,75 @@ static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
     m->loglik = inc;
 }
 
+/* Kalman engine: one extended Kalman step of a model, with the same
+ * dynamics as the particles (the clamp included, its Jacobian then 0).
+ * Noise moments are scaled to the step as the particle draws are (mean by
+ * `scale`, variance by scale^2). The log-likelihood is the Gaussian
+ * predictive density with the particle engine's floor: at floor_depth nats
+ * below the peak it turns into a slope of 1 nat per sd; beyond that point
+ * the innovation is clipped for the update (Huber). */
+static void kalman_update(hstpf_t *f, hstpf_model_t *m, double dt, double xu, int has_y, double yr,
+                          double scale)
+{
+    const hstpf_config_t *c = &f->cfg;
+    const double s = m->kx[0], v = m->kx[1];
+    const double pss = m->kp[0], psv = m->kp[1], pvv = m->kp[2];
+    const double sc2 = scale * scale;
+    double a = xu - (double)m->k0 - ((double)m->k1 + (double)m->k2 * v) * v, vd, fvv, ns, nv;
+    double qss, qsv, qvv;
+    if (c->n_track > 0u) {
+        a -= (double)track_acc(f, &m->track_hint, (real)s);
+    }
+    vd = v + dt * a;
+    fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v);
+    if (v >= 0.0 && vd < 0.0) {
+        vd = 0.0;
+        fvv = 0.0;
+    }
+    ns = s + dt * v + scale * c->noise_s.mean;
+    nv = vd + scale * c->noise_v.mean;
+    /* P = F P F' + Q with F = [1 dt; 0 fvv] */
+    qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
+    qsv = fvv * (psv + dt * pvv);
+    qvv = fvv * fvv * pvv + sc2 * c->noise_v.sd * c->noise_v.sd;
+    m->loglik = 0;
+    if (has_y) {
+        const double sy = qss + c->noise_e.sd * c->noise_e.sd;
+        const double sd = sqrt(sy);
+        const double depth = (double)(f->de.lp_max - f->de.floor);
+        const double zf = sqrt(2.0 * depth);
+        double z = (yr - c->noise_e.mean - ns) / sd, az = fabs(z), ll, ks, kv;
+        if (az <= zf) {
+            ll = -0.5 * z * z;
+            m->floor_run = 0;
+        } else {
+            ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
+            z = z > 0.0 ? zf : -zf;
+            ++m->floor_hits;
+            ++m->floor_run;
+        }
+        m->loglik = (real)(ll - 0.5 * log(6.283185307179586 * sy));
+        ks = qss / sy;
+        kv = qsv / sy;
+        ns += ks * z * sd;
+        nv += kv * z * sd;
+        /* Joseph-free form: P - K S K', kept symmetric */
+        qvv -= kv * qsv;
+        qsv -= ks * qsv;
+        qss -= ks * qss;
+        qvv = qvv > 0.0 ? qvv : 0.0;
+        qss = qss > 0.0 ? qss : 0.0;
+    }
+    m->kx[0] = ns;
+    m->kx[1] = nv;
+    m->kp[0] = qss;
+    m->kp[1] = qsv;
+    m->kp[2] = qvv;
+    m->s_mean = (real)ns;
+    m->v_mean = (real)nv;
+    m->ess = (real)c->n_particles;
+}
+
 /* Independent bank: each model resamples on its own weights and stream. */
 static void resample_own(hstpf_t *f, hstpf_model_t *m, const real *w)
 {
@@ -643,6 +739,7 @@ static void rebase(hstpf_t *f)
             m->s[i] -= d;
         }
         m->s_mean -= d;
+        m->kx[0] -= (double)d;
     }
     f->origin_m += (double)d;
     track_rebase(f);
@@ -705,11 +802,16 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         const real dt = (real)in->dt_s, xu = (real)(f->xi * in->traction);
         const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles;
         double ess_mix = 0.0;
-        if (paired) {
+        if (paired && !f->kalman) {
             draw_noise(f, &f->rng, scale);
         }
         for (l = 0; l < f->cfg.n_models; ++l) {
             hstpf_model_t *m = &f->m[l];
+            if (f->kalman) {
+                kalman_update(f, m, in->dt_s, f->xi * in->traction, has_y,
+                              in->position_m - f->origin_m, (double)scale);
+                continue;
+            }
             if (!paired) {
                 draw_noise(f, &m->rng, scale);
             }
@@ -733,10 +835,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
                 }
             }
         }
-        for (l = 0; paired && l < f->cfg.n_models; ++l) {
+        for (l = 0; paired && !f->kalman && l < f->cfg.n_models; ++l) {
             ess_mix += exp(f->m[l].logq) * (double)f->m[l].ess;
         }
-        if (paired && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || ess_mix < (double)thr)) {
+        if (paired && !f->kalman && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || ess_mix < (double)thr)) {
             resample_paired(f);
         }
     }
@@ -812,6 +914,9 @@ int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s, hstpf_real_
     }
     if (model >= f->cfg.n_models) {
         return HSTPF_E_SIZE;
+    }
+    if (f->kalman) {
+        return HSTPF_E_CONFIG;
     }
     for (i = 0; i < f->cfg.n_particles; ++i) {
         s[i] = f->origin_m + (double)f->m[model].s[i];

@@ -21,6 +21,7 @@ typedef enum {
     K_PRESET,
     K_TRACTION,
     K_STALE,
+    K_ENGINE,
     K_FORMAT,
     K_RXFILTER
 } ktype_t;
@@ -41,6 +42,8 @@ static const key_t_ keys[] = {
     {"log", K_PATH, OFF(log), 0, 0, 0, "candump log file to replay instead (offline)"},
     {"models", K_MODELS, 0, 0, 0, 0,
      "model set: Table 1 names and/or name:c0:c1:c2, comma-separated; all = the 17 rows"},
+    {"engine", K_ENGINE, 0, 0, 0, 0,
+     "per-model estimator: auto (Kalman if all three noises are Gaussian, else particles) | particle | kalman"},
     {"particles", K_U16, OFF(particles), 2, HSTPF_MAX_PARTICLES, 0, "particles per model"},
     {"seed", K_U64, OFF(seed), 0, 0, 0, "random seed of the filter"},
     {"gamma_rot", K_DBL, OFF(gamma_rot), 0, 1, 0, "rotating-mass factor gamma"},
@@ -165,6 +168,7 @@ void hstpfd_config_default(hstpfd_config_t *c)
     (void)hstpf_config_default(&fc);
     all_models(c);
     c->particles = fc.n_particles;
+    c->engine = fc.engine;
     c->seed = 1;
     c->gamma_rot = fc.gamma_rot;
     preset(c, 1);
@@ -530,6 +534,18 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
         }
         c->sched.stale_policy = sel == 0 ? HSTPFD_STALE_PREDICT : HSTPFD_STALE_WAIT;
         return 0;
+    case K_ENGINE:
+        if (strcmp(v, "auto") == 0) {
+            c->engine = HSTPF_ENGINE_AUTO;
+        } else if (strcmp(v, "particle") == 0) {
+            c->engine = HSTPF_ENGINE_PARTICLE;
+        } else if (strcmp(v, "kalman") == 0) {
+            c->engine = HSTPF_ENGINE_KALMAN;
+        } else {
+            fail(err, err_size, "engine: '%s' must be auto, particle or kalman", v);
+            return -1;
+        }
+        return 0;
     case K_RXFILTER:
         if (strcmp(v, "inputs") == 0) {
             c->rx_filter = HSTPFD_RX_FILTER_INPUTS;
@@ -664,6 +680,7 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->models = c->models;
     fc->n_models = c->n_models;
     fc->n_particles = c->particles;
+    fc->engine = c->engine;
     fc->seed = c->seed;
     fc->gamma_rot = c->gamma_rot;
     fc->noise_s = c->noise_s;
@@ -778,6 +795,12 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
             break;
         case K_STALE:
             PUT("%s = %s\n", k->name, c->sched.stale_policy == HSTPFD_STALE_PREDICT ? "predict" : "wait");
+            break;
+        case K_ENGINE:
+            PUT("%s = %s\n", k->name,
+                c->engine == HSTPF_ENGINE_AUTO       ? "auto"
+                : c->engine == HSTPF_ENGINE_PARTICLE ? "particle"
+                                                     : "kalman");
             break;
         case K_FORMAT:
             PUT("%s = %s\n", k->name, c->out_format == HSTPFD_OUT_JSONL ? "jsonl" : "csv");

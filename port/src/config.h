@@ -32,6 +32,7 @@ typedef struct {
     hstpf_theta_t models[HSTPF_MAX_MODELS]; /* names point into model_name */
     uint16_t n_models;
     uint16_t particles;
+    hstpf_engine_t engine;
     uint64_t seed;
     double gamma_rot;
     hstpf_dist_spec_t noise_s, noise_v, noise_e;

@@ -77,6 +77,7 @@ int main(void)
     cfg.n_models = 3;
     cfg.n_particles = N_PARTICLES;
     cfg.seed = 5;
+    cfg.engine = HSTPF_ENGINE_PARTICLE; /* float matters in the particle arithmetic */
     cfg.noise_s.sd = sd_s;
     cfg.noise_v.sd = sd_v;
     cfg.noise_e.sd = sd_e;

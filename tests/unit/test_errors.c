@@ -23,6 +23,7 @@ static void good_config(hstpf_config_t *c)
     c->n_models = 3;
     c->n_particles = 40;
     c->seed = 77;
+    c->engine = HSTPF_ENGINE_PARTICLE; /* hstpf_particles() needs particles */
 }
 
 static hstpf_input_t input(double dt, double u, double y, int has_y)

@@ -48,6 +48,7 @@ static void base_config(hstpf_config_t *c)
     c->n_models = 2;
     c->n_particles = NP;
     c->seed = 12345;
+    c->engine = HSTPF_ENGINE_PARTICLE; /* this file checks the particle step */
     c->noise_s.sd = 1e-9;
     c->noise_v.sd = 1e-9;
     c->noise_e.sd = 1.0;

@@ -107,12 +107,36 @@ typedef enum {
     HSTPF_BANK_PAIRED = 1
 } hstpf_bank_t;
 
+/** How each model's state and likelihood are computed. */
+typedef enum {
+    /** A particle filter per model (the paper's Section 3.1): any noise
+     *  densities. Its likelihood estimates carry Monte Carlo noise. */
+    HSTPF_ENGINE_PARTICLE = 0,
+    /** An extended Kalman filter per model on (s, v): the model is linear
+     *  but for c2 V^2 and the no-reversal rule, so with Gaussian noise the
+     *  model likelihood is exact up to that linearisation and carries no
+     *  Monte Carlo noise (the whole state is marginalised, i.e.
+     *  Rao-Blackwellised). n_particles, bank, resampling, roughening and
+     *  weight_method are then unused. Needs all three channels Gaussian. Measurements
+     *  beyond the likelihood floor (floor_depth of noise_e) count as
+     *  floor hits and enter the update clipped to the floor's edge (a
+     *  Huber update), so an outlier moves the state by a bounded amount. */
+    HSTPF_ENGINE_KALMAN = 1,
+    /** KALMAN when noise_s, noise_v and noise_e are all Gaussian, else
+     *  PARTICLE: the exact likelihood where it exists, particles where
+     *  the noise is not Gaussian. */
+    HSTPF_ENGINE_AUTO = 2
+} hstpf_engine_t;
+
 /** Configuration; fill with hstpf_config_default() then change fields. */
 typedef struct {
     const hstpf_theta_t *models; /**< n_models rows, read during init only */
     uint16_t n_models;           /**< 1..HSTPF_MAX_MODELS */
     uint16_t n_particles;        /**< 2..HSTPF_MAX_PARTICLES (default 100) */
     uint64_t seed;               /**< RNG seed; streams: model l uses l, the paired bank HSTPF_MAX_MODELS */
+    /** Per-model estimator (HSTPF_ENGINE_AUTO); HSTPF_E_CONFIG if KALMAN
+     *  is asked with a non-Gaussian channel. */
+    hstpf_engine_t engine;
     /** How the models' particle filters share randomness (see the enum);
      *  (HSTPF_BANK_INDEPENDENT; docs/results.md measures both). */
     hstpf_bank_t bank;
@@ -136,7 +160,11 @@ typedef struct {
     /** Floor on every model weight q_l after normalisation, so that a model
      *  can recover when conditions change; [0, 1/n_models) (1e-6). */
     double q_floor;
-    double declare_threshold;    /**< q above which a type may be declared (0.9) */
+    /** q above which a type may be declared (0.99). The paper's Table 2
+     *  uses 0.9 with tau = 0.3 x the run's length, unknown online; with a
+     *  short tau, 0.9 lets a wrong type through in 2-4 % of 17-type runs
+     *  even with exact likelihoods (docs/results.md). */
+    double declare_threshold;
     double declare_hold_s;       /**< tau: how long it must stay above (30 s) */
     /** Measurements farther than this from the predicted position are
      *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
@@ -177,7 +205,7 @@ typedef struct {
     hstpf_real_t q;         /**< model weight q_l */
     double position_m;      /**< posterior mean position, m */
     hstpf_real_t speed_mps; /**< posterior mean speed, m/s */
-    hstpf_real_t ess;       /**< effective sample size after the update */
+    hstpf_real_t ess;       /**< effective sample size after the update (n_particles under the Kalman engine) */
     hstpf_real_t loglik;    /**< last log-likelihood increment of the model */
     uint32_t floor_hits;    /**< steps where every particle was at the floor */
     uint32_t reacquired;    /**< times the model lost the train and was redrawn */
@@ -216,6 +244,8 @@ typedef struct {
     uint32_t floor_hits, reacquired;
     uint16_t floor_run;                   /* consecutive all-floor steps */
     uint16_t track_hint;
+    double kx[2];                         /* Kalman engine: mean (s rel., v) */
+    double kp[3];                         /* and covariance (ss, sv, vv) */
 } hstpf_model_t;
 
 /**
@@ -249,6 +279,7 @@ typedef struct {
     uint32_t outliers, reacquired;
     uint16_t outlier_run;            /* consecutive gated measurements */
     uint8_t have_fix;
+    uint8_t kalman;                  /* the engine resolved at init */
 } hstpf_t;
 
 /**
@@ -270,8 +301,9 @@ int32_t hstpf_config_default(hstpf_config_t *cfg);
  * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_ABI; HSTPF_E_SIZE (n_models,
  *   n_particles, n_track); HSTPF_E_NONFINITE; HSTPF_E_RANGE (coefficients,
  *   gamma_rot, prior, track values out of range, track not increasing);
- *   HSTPF_E_CONFIG (enums, ess_threshold, q_floor, declare_threshold,
- *   declare_hold_s, gate_m, dt_nominal_s, roughening values); HSTPF_E_DIST
+ *   HSTPF_E_CONFIG (enums, engine KALMAN with non-Gaussian noise,
+ *   ess_threshold, q_floor, declare_threshold, declare_hold_s, gate_m,
+ *   dt_nominal_s, roughening values); HSTPF_E_DIST
  *   (from hstpf_dist_init()). On error *f is unchanged.
  * Cost: four hstpf_dist_init() calls; no memory besides *f.
  */
@@ -296,7 +328,8 @@ int32_t hstpf_reset(hstpf_t *f);
  *   unchanged and the next valid step proceeds normally.
  * Cost: O(n_models x n_particles): per particle two RNG draws and table
  * samples, the model update, one log-density and one exp look-up; per model
- * one log(); bounded. Stack below 1 KiB (560 B measured on a Cortex-M4F
+ * one log(); bounded. The Kalman engine: O(n_models), about 60 flops and
+ * one log() per model. Stack below 1 KiB (560 B measured on a Cortex-M4F
  * with libm, docs/footprint.md); no other memory.
  */
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
@@ -313,7 +346,8 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
  * caller arrays of at least n_particles elements, and their normalised
  * weights (may be NULL). For plots and tests.
  * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_INIT; HSTPF_E_SIZE (model out of
- *   range). Cost O(n_particles).
+ *   range); HSTPF_E_CONFIG (the Kalman engine has no particles).
+ *   Cost O(n_particles).
  */
 int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s,
                         hstpf_real_t *v, hstpf_real_t *w);
