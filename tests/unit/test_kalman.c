@@ -1,0 +1,369 @@
+/* The Kalman engine (HSTPF_ENGINE_KALMAN / AUTO with Gaussian noise).
+ *
+ * Step tests compare one step with the extended Kalman filter written out
+ * here from the textbook equations (2x2 matrices, double):
+ *   prior at the fix: x = (y - mean_e, v0), P = diag(sd_e^2, sd_v0^2);
+ *   predict: a = xi (u - W(v)), F = [1 T; 0 1 - T xi W'(v)] (0 when the
+ *            no-reversal rule clamps), x = (s + T v, v + T a),
+ *            P = F P F' + diag(sd_s^2, sd_v^2);
+ *   update:  S = P_ss + sd_e^2, K = P(:, 1) / S, x += K (y - s),
+ *            P -= K S K', log-likelihood log N(y - s; 0, S).
+ * Beyond the floor (|z| > z_f, 0.5 z_f^2 = floor depth = 30 nats) the
+ * log-likelihood is -0.5 log(2 pi S) - 30 - (|z| - z_f) and the update uses
+ * the innovation clipped to z_f sqrt(S).
+ * Tolerances: the library keeps the Kalman state in double and outputs
+ * positions relative to its origin (the first fix), speed and
+ * log-likelihood as hstpf_real_t: 4 eps of the value (200 m for positions).
+ *
+ * Consistency (statistical): on runs of tools/sim with the filter's own
+ * model, the normalised innovation squared, mean over k of
+ * -2 l_k - log(2 pi S_ss) with S_ss the steady state of the Riccati
+ * recursion computed here, must be 1 within 0.1 (its sd over 1500 white
+ * innovations is sqrt(2/1500) = 0.037: 2.7 sd). Held for a linear model
+ * (c1 = c2 = 0: the EKF is the exact Kalman filter) and for CRH3 (c2 V^2
+ * linearised). */
+#include <string.h>
+
+#include "hstpf_sim.h"
+#include "testutil.h"
+
+#define XI (9.81 / 1.06 / 1000.0)
+#define LOG_2PI 1.8378770664093453
+
+static hstpf_t filt; /* static, as on a target */
+static hstpf_theta_t models[2];
+
+typedef struct {
+    double x[2], p[3]; /* mean (s, v), covariance (ss, sv, vv) */
+} ekf_t;
+
+static double w_of(const hstpf_theta_t *th, double v)
+{
+    const double V = 3.6 * v;
+    return th->c0 + th->c1 * V + th->c2 * V * V;
+}
+
+static double dw_of(const hstpf_theta_t *th, double v) /* dW/dv */
+{
+    return 3.6 * th->c1 + 2.0 * 12.96 * th->c2 * v;
+}
+
+static void ekf_predict(ekf_t *k, const hstpf_theta_t *th, double dt, double u, double qs, double qv)
+{
+    double f[2][2] = {{1.0, dt}, {0.0, 1.0 - dt * XI * dw_of(th, k->x[1])}};
+    double vd = k->x[1] + dt * XI * (u - w_of(th, k->x[1]));
+    const double P[2][2] = {{k->p[0], k->p[1]}, {k->p[1], k->p[2]}};
+    double fp[2][2], n[2][2];
+    int i, j;
+    if (k->x[1] >= 0.0 && vd < 0.0) {
+        vd = 0.0;
+        f[1][1] = 0.0;
+    }
+    for (i = 0; i < 2; ++i) {
+        for (j = 0; j < 2; ++j) {
+            fp[i][j] = f[i][0] * P[0][j] + f[i][1] * P[1][j];
+        }
+    }
+    for (i = 0; i < 2; ++i) {
+        for (j = 0; j < 2; ++j) {
+            n[i][j] = fp[i][0] * f[j][0] + fp[i][1] * f[j][1];
+        }
+    }
+    k->x[0] += dt * k->x[1];
+    k->x[1] = vd;
+    k->p[0] = n[0][0] + qs;
+    k->p[1] = n[0][1];
+    k->p[2] = n[1][1] + qv;
+}
+
+/* Returns the log-likelihood of y. */
+static double ekf_update(ekf_t *k, double y, double r)
+{
+    const double S = k->p[0] + r, k0 = k->p[0] / S, k1 = k->p[1] / S, inn = y - k->x[0];
+    const double p0 = k->p[0], p1 = k->p[1], p2 = k->p[2];
+    k->x[0] += k0 * inn;
+    k->x[1] += k1 * inn;
+    k->p[0] = p0 - k0 * S * k0;
+    k->p[1] = p1 - k0 * S * k1;
+    k->p[2] = p2 - k1 * S * k1;
+    return -0.5 * LOG_2PI - 0.5 * log(S) - 0.5 * inn * inn / S;
+}
+
+static void config(hstpf_config_t *c, hstpf_engine_t engine)
+{
+    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
+    models[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    models[1] = hstpf_train_types[hstpf_train_type_find("SS8")];
+    c->models = models;
+    c->n_models = 2;
+    c->engine = engine;
+    c->noise_s.sd = 0.5;
+    c->noise_v.sd = 0.2;
+    c->noise_e.sd = 2.0;
+    c->init_speed_mps = 50.0;
+    c->init_speed_sd = 1.5;
+    c->gate_m = 0.0;
+}
+
+static void step(double dt, double u, double y, int has_y)
+{
+    hstpf_input_t in;
+    in.dt_s = dt;
+    in.traction = u;
+    in.position_m = y;
+    in.has_position = (uint8_t)has_y;
+    assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
+}
+
+static double tol(double x)
+{
+    return 4.0 * TU_REAL_EPS * fabs(x) + 1e-12;
+}
+
+/* One predict + update per model, and the model weights from it. */
+static void test_step(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t est;
+    ekf_t k[2];
+    double ll[2], q0;
+    int l;
+    (void)state;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    step(1.0, 0.0, 1000.0, 1);
+    step(0.8, 20.0, 1041.7, 1);
+    assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
+    for (l = 0; l < 2; ++l) {
+        k[l].x[0] = 1000.0;
+        k[l].x[1] = 50.0;
+        k[l].p[0] = 4.0;
+        k[l].p[1] = 0.0;
+        k[l].p[2] = 2.25;
+        ekf_predict(&k[l], &models[l], 0.8, 20.0, 0.25 * 0.8, 0.04 * 0.8); /* variance scales with T */
+        ll[l] = ekf_update(&k[l], 1041.7, 4.0);
+        TU_CLOSE(est.model[l].position_m, k[l].x[0], tol(200.0));
+        TU_CLOSE(est.model[l].speed_mps, k[l].x[1], tol(50.0));
+        TU_CLOSE(est.model[l].loglik, ll[l], tol(ll[l]) + 1e-6);
+        TU_CLOSE(est.model[l].ess, 100.0, 0.0);
+        assert_int_equal(est.model[l].floor_hits, 0);
+    }
+    /* uniform prior: q_0 = 1 / (1 + exp(l_1 - l_0)) */
+    q0 = 1.0 / (1.0 + exp(ll[1] - ll[0]));
+    TU_CLOSE(est.model[0].q, q0, 1e-5);
+    TU_CLOSE(est.model[1].q, 1.0 - q0, 1e-5);
+    /* a step without a position predicts only and leaves the weights */
+    step(1.0, 20.0, 0.0, 0);
+    for (l = 0; l < 2; ++l) {
+        ekf_predict(&k[l], &models[l], 1.0, 20.0, 0.25, 0.04);
+    }
+    {
+        hstpf_estimate_t e2;
+        assert_int_equal(hstpf_estimate(&filt, &e2), HSTPF_OK);
+        for (l = 0; l < 2; ++l) {
+            TU_CLOSE(e2.model[l].position_m, k[l].x[0], tol(200.0));
+            TU_CLOSE(e2.model[l].speed_mps, k[l].x[1], tol(50.0));
+            TU_CLOSE(e2.model[l].q, est.model[l].q, 1e-7);
+        }
+        /* one more fix: the covariance after the update and the
+         * prediction now shows in the gain and the likelihood */
+        step(1.0, 20.0, 1143.0, 1);
+        assert_int_equal(hstpf_estimate(&filt, &e2), HSTPF_OK);
+        for (l = 0; l < 2; ++l) {
+            ekf_predict(&k[l], &models[l], 1.0, 20.0, 0.25, 0.04);
+            ll[l] += ekf_update(&k[l], 1143.0, 4.0);
+            TU_CLOSE(e2.model[l].position_m, k[l].x[0], tol(200.0));
+            TU_CLOSE(e2.model[l].speed_mps, k[l].x[1], tol(50.0));
+        }
+        q0 = 1.0 / (1.0 + exp(ll[1] - ll[0]));
+        TU_CLOSE(e2.model[0].q, q0, 1e-5);
+    }
+}
+
+/* Braking from 1 m/s cannot reverse the train: v' = 0, and the clamp's
+ * Jacobian is 0, so the speed variance is the process noise alone. */
+static void test_no_reversal(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t est;
+    ekf_t k;
+    (void)state;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    c.init_speed_mps = 1.0;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    step(1.0, 0.0, 500.0, 1);
+    step(1.0, -200.0, 501.0, 1);
+    assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
+    k.x[0] = 500.0;
+    k.x[1] = 1.0;
+    k.p[0] = 4.0;
+    k.p[1] = 0.0;
+    k.p[2] = 2.25;
+    ekf_predict(&k, &models[0], 1.0, -200.0, 0.25, 0.04);
+    TU_CLOSE(k.x[1], 0.0, 0.0); /* the reference clamps too */
+    TU_CLOSE(k.p[2], 0.04, 1e-15);
+    (void)ekf_update(&k, 501.0, 4.0);
+    TU_CLOSE(est.model[0].position_m, k.x[0], tol(200.0));
+    TU_CLOSE(est.model[0].speed_mps, k.x[1], tol(1.0) + 1e-7);
+}
+
+/* A fix 1000 sd away: the log-likelihood follows the floor's slope, the
+ * floor hit is counted, the state moves by the clipped innovation only,
+ * and the next good fix is used normally. */
+static void test_outlier(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t est;
+    ekf_t k;
+    double S, zf, inn, z, ll;
+    (void)state;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    step(1.0, 0.0, 1000.0, 1);
+    k.x[0] = 1000.0;
+    k.x[1] = 50.0;
+    k.p[0] = 4.0;
+    k.p[1] = 0.0;
+    k.p[2] = 2.25;
+    ekf_predict(&k, &models[0], 1.0, 20.0, 0.25, 0.04);
+    S = k.p[0] + 4.0;
+    inn = 1000.0 * sqrt(S);
+    z = inn / sqrt(S);
+    zf = sqrt(2.0 * 30.0);
+    ll = -0.5 * LOG_2PI - 0.5 * log(S) - 30.0 - (z - zf);
+    step(1.0, 20.0, k.x[0] + inn, 1);
+    assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
+    TU_CLOSE(est.model[0].loglik, ll, tol(ll) + 1e-5);
+    assert_int_equal(est.model[0].floor_hits, 1);
+    /* the update with the clipped innovation zf sqrt(S) */
+    (void)ekf_update(&k, k.x[0] + zf * sqrt(S), 4.0);
+    TU_CLOSE(est.model[0].position_m, k.x[0], tol(200.0));
+    TU_CLOSE(est.model[0].speed_mps, k.x[1], tol(50.0));
+    ekf_predict(&k, &models[0], 1.0, 20.0, 0.25, 0.04);
+    step(1.0, 20.0, k.x[0], 1);
+    assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
+    assert_int_equal(est.model[0].floor_hits, 1);
+    assert_true(isfinite(est.position_m) && isfinite((double)est.model[0].loglik));
+}
+
+/* AUTO takes the Kalman engine with Gaussian noise only; KALMAN with a
+ * Gamma channel and an unknown engine are configuration errors; the
+ * Kalman engine has no particles to read. */
+static void test_engine_choice(void **state)
+{
+    hstpf_config_t c;
+    double s[100];
+    hstpf_real_t v[100];
+    (void)state;
+    config(&c, HSTPF_ENGINE_AUTO);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_E_CONFIG);
+    c.noise_e.kind = HSTPF_DIST_GAMMA;
+    c.noise_e.shape = 0.5;
+    c.noise_e.scale = 0.2;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_OK); /* particles */
+    c.engine = HSTPF_ENGINE_KALMAN;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
+    config(&c, HSTPF_ENGINE_KALMAN);
+    c.noise_v.kind = HSTPF_DIST_GAMMA;
+    c.noise_v.shape = 0.1;
+    c.noise_v.scale = 0.05;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
+    config(&c, HSTPF_ENGINE_PARTICLE);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_OK);
+    c.engine = (hstpf_engine_t)7;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
+}
+
+/* Steady-state innovation variance of the constant-velocity Riccati
+ * recursion (F = [1 1; 0 f], f = 1 - xi W'(v), frozen). */
+static double s_steady(double f, double qs, double qv, double r)
+{
+    double p[3] = {r, 0.0, 1.0}, S = 0.0;
+    int i;
+    for (i = 0; i < 10000; ++i) {
+        const double a = p[0] + 2.0 * p[1] + p[2] + qs, b = f * (p[1] + p[2]), d = f * f * p[2] + qv;
+        S = a + r;
+        p[0] = a - a * a / S;
+        p[1] = b - a * b / S;
+        p[2] = d - b * b / S;
+    }
+    return S;
+}
+
+static void nis_run(const hstpf_theta_t *truth, double *nis_mean, double *pos_rms, double *p_ss)
+{
+    hstpf_sim_config_t sc;
+    hstpf_sim_t sim;
+    hstpf_sim_sample_t smp;
+    hstpf_config_t c;
+    hstpf_estimate_t est;
+    double sum = 0.0, se = 0.0, S;
+    int n = 0, seed;
+    models[0] = *truth;
+    for (seed = 1; seed <= 3; ++seed) {
+        hstpf_sim_default(&sc);
+        hstpf_sim_case1(&sc);
+        sc.truth = *truth;
+        sc.seed = (uint64_t)seed;
+        assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+        c.models = models;
+        c.n_models = 1;
+        c.engine = HSTPF_ENGINE_KALMAN;
+        c.noise_s = sc.noise_s;
+        c.noise_v = sc.noise_v;
+        c.noise_e = sc.noise_e;
+        assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+        hstpf_sim_init(&sim, &sc);
+        while (sim.t <= 900.0) {
+            hstpf_input_t in;
+            hstpf_sim_next_input(&sim, &smp, &in);
+            assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
+            assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);
+            if (smp.t >= 400.0) { /* cruise: speed held, F frozen */
+                S = s_steady(1.0 - XI * dw_of(truth, smp.v), 0.02, 0.05, 5.0);
+                sum += -2.0 * (double)est.model[0].loglik - LOG_2PI - log(S);
+                se += (est.position_m - smp.s) * (est.position_m - smp.s);
+                ++n;
+            }
+        }
+    }
+    {
+        const double f = 1.0 - XI * dw_of(truth, 350.0 / 3.6);
+        S = s_steady(f, 0.02, 0.05, 5.0);
+        *p_ss = 5.0 - 25.0 / S; /* posterior P_ss = r - r^2 / S */
+    }
+    *nis_mean = sum / n;
+    *pos_rms = sqrt(se / n);
+}
+
+static void test_consistency(void **state)
+{
+    const hstpf_theta_t lin = {"linear", 1.0, 0.0, 0.0};
+    const hstpf_theta_t *cases[2];
+    int i;
+    (void)state;
+    cases[0] = &lin;
+    cases[1] = &hstpf_train_types[hstpf_train_type_find("CRH3")];
+    for (i = 0; i < 2; ++i) {
+        double nis, rms, pss;
+        nis_run(cases[i], &nis, &rms, &pss);
+        print_message("%s: NIS mean %.3f (1), position RMS %.3f m (steady-state sd %.3f m)\n",
+                      cases[i]->name, nis, rms, sqrt(pss));
+        TU_CLOSE(nis, 1.0, 0.1);
+        /* the error variance matches P_ss: 1500 correlated errors, +-15 % */
+        TU_CLOSE(rms * rms / pss, 1.0, 0.15);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_step),          cmocka_unit_test(test_no_reversal),
+        cmocka_unit_test(test_outlier),       cmocka_unit_test(test_engine_choice),
+        cmocka_unit_test(test_consistency),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
