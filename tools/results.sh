@@ -11,15 +11,30 @@ mc=build/tools/montecarlo/hstpf-mc
 out=out/results
 mkdir -p "$out" docs/img
 # One setting for every case and truth; only the noise model is the case's.
+# Library defaults otherwise: engine auto (Kalman for Gaussian noise,
+# particles for Gamma), M = 100, declaration at q > 0.99 held 30 s.
 settings=(--edge-soft 0.2)
 seeds=${HSTPF_SEEDS:-100}
 for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-known; do
   echo "== $s"
   trace=()
-  n=$seeds
-  case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; hilly-*) n=$(( seeds < 30 ? seeds : 30 )) ;; esac
-  "$mc" --scenario "$s" --seeds "$n" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
+  case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; esac
+  "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
 done
+echo "== particle engine on the Gaussian cases (the paper's method)"
+for s in paper1 all17; do
+  "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --engine particle | tee "$out/$s-particle.txt"
+done
+echo "== declaration rule (17 types, both engines)"
+{
+  echo "engine | threshold | hold [s] | result"
+  for r in "kalman 0.9 30" "kalman 0.9 300" "kalman 0.99 30" "kalman 0.99 60" "particle 0.9 30"; do
+    set -- $r
+    echo "$1 | $2 | $3 | $("$mc" --scenario all17 --seeds "$seeds" "${settings[@]}" --engine "$1" \
+      --threshold "$2" --hold "$3" | tail -1)"
+  done
+  echo "particle | 0.99 | 30 | $(tail -1 "$out/all17-particle.txt")"
+} | tee "$out/declaration_rule.txt"
 echo "== Case 2 ablation"
 {
   echo "variant | result"

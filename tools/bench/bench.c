@@ -11,6 +11,9 @@
  * thread's CPU time (CLOCK_THREAD_CPUTIME_ID) is reported beside the wall
  * time: a large gap means the run was preempted (a busy machine).
  *
+ * Configurations MxN run the particle engine; MxK runs the Kalman engine
+ * (one EKF per model), reported per model-step instead.
+ *
  * Models: 3 = the paper's Case 1 set {SS1/SS3/SS4, CRH3, SS8}; otherwise the
  * first M rows of Table 1 (17 = all of them). Not a test: ctest does not run
  * it. Pin it to one core for stable figures: taskset -c 1 hstpf-bench. */
@@ -48,6 +51,7 @@
 
 typedef struct {
     unsigned models, particles;
+    int kalman;               /* Kalman engine: figures are per model-step */
     int skipped;              /* above the library's capacity */
     unsigned runs;
     double ns[MAX_RUNS];      /* ns per particle-step, per run (wall) */
@@ -85,7 +89,9 @@ static void usage(void)
 {
     fprintf(stderr,
             "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
-            "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n");
+            "  MxN: M models, N particles; MxK: M models, Kalman engine\n"
+            "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
+            "           --config 3xK --config 17xK\n");
 }
 
 static int fill_models(hstpf_theta_t *models, unsigned m)
@@ -132,7 +138,8 @@ static double run_once(const hstpf_config_t *cfg, const hstpf_input_t *in, unsig
         c1 = clock_ns(CLOCK_THREAD_CPUTIME_ID);
         elapsed += t1 - t0;
         cpu += c1 - c0;
-        ps += (unsigned long long)steps * cfg->n_models * cfg->n_particles;
+        ps += (unsigned long long)steps * cfg->n_models *
+              (cfg->engine == HSTPF_ENGINE_KALMAN ? 1u : cfg->n_particles);
         (void)hstpf_estimate(&filt, &est);
         r->declared = est.declared;
         if (ok != steps) {
@@ -168,7 +175,16 @@ int main(int argc, char **argv)
             min_time = atof(argv[++i]);
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--config") == 0 && n_cfg < MAX_CONFIGS) {
             unsigned m = 0, p = 0;
-            if (sscanf(argv[++i], "%ux%u", &m, &p) != 2 || m < 1u || m > HSTPF_N_TRAIN_TYPES ||
+            const char *arg = argv[++i];
+            char kc = 0;
+            if (sscanf(arg, "%ux%c", &m, &kc) == 2 && kc == 'K' && m >= 1u && m <= HSTPF_N_TRAIN_TYPES) {
+                res[n_cfg].models = m;
+                res[n_cfg].particles = 2;
+                res[n_cfg].kalman = 1;
+                ++n_cfg;
+                continue;
+            }
+            if (sscanf(arg, "%ux%u", &m, &p) != 2 || m < 1u || m > HSTPF_N_TRAIN_TYPES ||
                 p < 2u || p > 65535u) {
                 usage();
                 return 2;
@@ -190,7 +206,13 @@ int main(int argc, char **argv)
         res[0].particles = 100;
         res[1].models = 17;
         res[1].particles = 1000;
-        n_cfg = 2;
+        res[2].models = 3;
+        res[2].particles = 2;
+        res[2].kalman = 1;
+        res[3].models = 17;
+        res[3].particles = 2;
+        res[3].kalman = 1;
+        n_cfg = 4;
     }
 
     /* the inputs, simulated once: only hstpf_step() is timed */
@@ -225,6 +247,7 @@ int main(int argc, char **argv)
         cfg.n_models = (uint16_t)r->models;
         cfg.n_particles = (uint16_t)r->particles;
         cfg.seed = 2;
+        cfg.engine = r->kalman ? HSTPF_ENGINE_KALMAN : HSTPF_ENGINE_PARTICLE;
         if (run_once(&cfg, in, steps, 0.0, r, &r->cpu[0]) < 0.0) { /* warm-up */
             return 1;
         }
@@ -254,16 +277,18 @@ int main(int argc, char **argv)
         printf("  \"target_ns_per_particle_step\": %g,\n  \"results\": [", TARGET_NS);
         for (i = 0; i < n_cfg; ++i) {
             const result_t *r = &res[i];
-            printf("%s\n    {\"models\": %u, \"particles\": %u, ", i ? "," : "", r->models,
-                   r->particles);
+            const double per = r->kalman ? 1.0 : (double)r->particles;
+            printf("%s\n    {\"models\": %u, \"engine\": \"%s\", \"particles\": %u, ", i ? "," : "",
+                   r->models, r->kalman ? "kalman" : "particle", r->kalman ? 0u : r->particles);
             if (r->skipped) {
                 printf("\"skipped\": \"above the library's capacity\"}");
                 continue;
             }
+            /* Kalman rows: "particle" reads "model" (one EKF per model) */
             printf("\"ns_per_particle_step_median\": %.3f, \"ns_per_particle_step_min\": %.3f, ",
                    r->med, r->min);
             printf("\"steps_per_s_median\": %.1f, \"steps_per_s_max\": %.1f, ",
-                   1e9 / (r->med * r->models * r->particles), 1e9 / (r->min * r->models * r->particles));
+                   1e9 / (r->med * r->models * per), 1e9 / (r->min * r->models * per));
             printf("\"cpu_ns_per_particle_step_median\": %.3f, ", r->cpu_med);
             printf("\"particle_steps_per_run\": %llu, \"declared\": %d, \"ns_per_particle_step\": [",
                    r->particle_steps, r->declared);
@@ -295,13 +320,19 @@ int main(int argc, char **argv)
             printf("%6u %9u   skipped: above this library's capacity\n", r->models, r->particles);
             continue;
         }
+        if (r->kalman) {
+            printf("%6u %9s %14.2f %14.2f %14.0f %15.0f %13.2f  (ns per model-step)\n", r->models,
+                   "Kalman", r->med, r->min, 1e9 / (r->med * r->models), 1e9 / (r->min * r->models),
+                   r->cpu_med);
+            continue;
+        }
         printf("%6u %9u %14.2f %14.2f %14.0f %15.0f %13.2f\n", r->models, r->particles, r->med,
                r->min, 1e9 / (r->med * r->models * r->particles),
                1e9 / (r->min * r->models * r->particles), r->cpu_med);
     }
     printf("\ntarget: under %.0f ns per particle-step:", TARGET_NS);
     for (i = 0; i < n_cfg; ++i) {
-        if (!res[i].skipped) {
+        if (!res[i].skipped && !res[i].kalman) {
             printf(" %ux%u %s", res[i].models, res[i].particles,
                    res[i].med < TARGET_NS ? "met" : "NOT met");
         }
