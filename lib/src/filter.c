@@ -42,7 +42,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->ess_threshold = 0.5;
     cfg->roughening_k = 0.2;
     cfg->weight_method = HSTPF_WEIGHT_MARGINAL;
-    cfg->q_floor = 1e-6;
+    cfg->q_floor = 1e-9;
     cfg->declare_threshold = 0.99;
     cfg->declare_hold_s = 30.0;
     cfg->gate_m = 1000.0;

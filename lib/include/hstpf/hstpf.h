@@ -158,7 +158,10 @@ typedef struct {
     double rough_min_v;          /**< minimum roughening sd, m/s (0) */
     hstpf_weight_method_t weight_method; /**< (HSTPF_WEIGHT_MARGINAL) */
     /** Floor on every model weight q_l after normalisation, so that a model
-     *  can recover when conditions change; [0, 1/n_models) (1e-6). */
+     *  can recover when conditions change; [0, 1/n_models) (1e-9). A wrong
+     *  model at the floor returns to q ~ 0.1 after one step that favours
+     *  it by log(0.1 / q_floor) nats: 18.4 at 1e-9, 11.5 at 1e-6, which
+     *  single steps of a lost model reached (docs/results.md). */
     double q_floor;
     /** q above which a type may be declared (0.99). The paper's Table 2
      *  uses 0.9 with tau = 0.3 x the run's length, unknown online; with a
