@@ -164,13 +164,36 @@ int main(void)
     }
     stack_step = used(sp);
     (void)hstpf_estimate(&filt, &est);
+    /* the particle engine's stack too (the default picks Kalman here) */
+    {
+        hstpf_config_t pc = cfg;
+        uint32_t ok_p = 0u, stack_p;
+        pc.engine = HSTPF_ENGINE_PARTICLE;
+        if (hstpf_init(&filt, sizeof filt, &pc) != HSTPF_OK) {
+            return 1;
+        }
+        sp = stack_pointer();
+        paint(sp);
+        for (k = 0u; k < N_STEPS; ++k) {
+            ok_p += hstpf_step(&filt, &inputs[k]) == HSTPF_OK ? 1u : 0u;
+        }
+        stack_p = used(sp);
+        p = put_s(line, "m4f: particle engine: steps ");
+        p = put_u(p, ok_p);
+        p = put_s(p, ", stack used by hstpf_step ");
+        p = put_u(p, stack_p);
+        emit(line, put_s(p, " B"));
+        stack_step = stack_p > stack_step ? stack_p : stack_step;
+    }
 
     /* timed pass: the SysTick interrupt pushes frames, so it stays off
      * while the stack is measured above */
     {
         uint64_t t0, t1;
         uint32_t ok2 = 0u;
-        if (hstpf_init(&filt, sizeof filt, &cfg) != HSTPF_OK) {
+        hstpf_config_t pc = cfg;
+        pc.engine = HSTPF_ENGINE_PARTICLE;
+        if (hstpf_init(&filt, sizeof filt, &pc) != HSTPF_OK) {
             return 1;
         }
         fw_ticks_start();
@@ -185,6 +208,23 @@ int main(void)
         p = put_s(p, " steps of 3 models x ");
         p = put_u(p, cfg.n_particles);
         p = put_s(p, " particles in ");
+        p = put_u(p, t1 - t0);
+        emit(line, put_s(p, " SysTick counts"));
+        pc.engine = HSTPF_ENGINE_KALMAN;
+        if (hstpf_init(&filt, sizeof filt, &pc) != HSTPF_OK) {
+            return 1;
+        }
+        ok2 = 0u;
+        fw_ticks_start();
+        t0 = fw_ticks();
+        for (k = 0u; k < N_STEPS; ++k) {
+            ok2 += hstpf_step(&filt, &inputs[k]) == HSTPF_OK ? 1u : 0u;
+        }
+        t1 = fw_ticks();
+        fw_ticks_stop();
+        p = put_s(line, "m4f: timed Kalman pass: ");
+        p = put_u(p, ok2);
+        p = put_s(p, " steps of 3 models in ");
         p = put_u(p, t1 - t0);
         emit(line, put_s(p, " SysTick counts"));
     }
