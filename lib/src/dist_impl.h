@@ -175,6 +175,11 @@ static inline hstpf_real_t hstpf__log_pos(hstpf_real_t x)
            (hstpf_real_t)0.69314718055994531;
 }
 
+/* Replaces the log-density of a built Gamma distribution by that of the
+ * variate plus N(0, sd), sd > 0; the sampling tables are kept. Init-time
+ * cost: a few 10^5 exp and pow. HSTPF_E_DIST for any other kind. */
+int32_t hstpf__dist_blur(hstpf_dist_t *d, const hstpf_dist_spec_t *spec, double sd);
+
 /* Validates a specification without building it (used by hstpf_init). */
 int32_t hstpf__dist_check(const hstpf_dist_spec_t *spec);
 

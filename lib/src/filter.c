@@ -69,7 +69,7 @@ static int all_gaussian(const hstpf_config_t *c)
 
 static int32_t check_config(const hstpf_config_t *c)
 {
-    const double nums[] = {c->gamma_rot, c->dt_nominal_s, c->init_speed_mps, c->init_speed_sd,
+    const double nums[] = {c->e_blur_sd, c->gamma_rot, c->dt_nominal_s, c->init_speed_mps, c->init_speed_sd,
                            c->ess_threshold, c->roughening_k, c->rough_min_s, c->rough_min_v,
                            c->q_floor, c->declare_threshold, c->declare_hold_s, c->gate_m};
     uint32_t i;
@@ -105,7 +105,8 @@ static int32_t check_config(const hstpf_config_t *c)
         c->roughening_k > 10.0 || c->rough_min_s < 0.0 || c->rough_min_v < 0.0 ||
         c->q_floor < 0.0 || c->q_floor * (double)c->n_models >= 1.0 ||
         !(c->declare_threshold > 0.5 && c->declare_threshold < 1.0) || c->declare_hold_s < 0.0 ||
-        c->gate_m < 0.0 || !(c->dt_nominal_s > 0.0 && c->dt_nominal_s <= HSTPF_DT_MAX_S)) {
+        c->gate_m < 0.0 || !(c->dt_nominal_s > 0.0 && c->dt_nominal_s <= HSTPF_DT_MAX_S) ||
+        c->e_blur_sd < 0.0 || (c->e_blur_sd > 0.0 && c->noise_e.kind == HSTPF_DIST_TABLE)) {
         return HSTPF_E_CONFIG;
     }
     for (i = 0; i < c->n_track; ++i) {
@@ -226,7 +227,17 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
         /* specs were checked above, so these cannot fail */
         (void)hstpf_dist_init(&f->ds, &cfg->noise_s);
         (void)hstpf_dist_init(&f->dv, &cfg->noise_v);
-        (void)hstpf_dist_init(&f->de, &cfg->noise_e);
+        if (cfg->e_blur_sd > 0.0 && !f->kalman && cfg->noise_e.kind == HSTPF_DIST_GAUSSIAN) {
+            /* a blurred Gaussian is a wider Gaussian (the first fix draws from it too) */
+            hstpf_dist_spec_t e2 = cfg->noise_e;
+            e2.sd = sqrt(e2.sd * e2.sd + cfg->e_blur_sd * cfg->e_blur_sd);
+            (void)hstpf_dist_init(&f->de, &e2);
+        } else {
+            (void)hstpf_dist_init(&f->de, &cfg->noise_e);
+            if (cfg->e_blur_sd > 0.0 && !f->kalman) {
+                (void)hstpf__dist_blur(&f->de, &cfg->noise_e, cfg->e_blur_sd);
+            }
+        }
         (void)hstpf_dist_init(&f->unit, &unit);
     }
     reset_state(f);

@@ -57,6 +57,10 @@ static const key_t_ keys[] = {
     {"init_speed_mps", K_DBL, OFF(init_speed_mps), -HSTPF_SPEED_MAX, HSTPF_SPEED_MAX, 0,
      "prior speed mean at the first fix, m/s"},
     {"init_speed_sd", K_DBL, OFF(init_speed_sd), 0, HSTPF_SPEED_MAX, 0, "prior speed sd, m/s"},
+    {"roughening_k", K_DBL, OFF(roughening_k), 0, 10, 0,
+     "particle engine: roughening after resampling, sd = k x spread / sqrt(M)"},
+    {"e_blur_sd", K_DBL, OFF(e_blur_sd), 0, 1e3, 0,
+     "particle engine: measurement density blurred by N(0, sd), m (0 = exact; for one-sided noise)"},
     {"declare_threshold", K_DBL, OFF(declare_threshold), 0, 1, 1,
      "model weight above which a type may be declared"},
     {"declare_hold_s", K_DBL, OFF(declare_hold_s), 0, 1e6, 0, "how long it must stay above, s"},
@@ -175,6 +179,8 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->dt_nominal_s = fc.dt_nominal_s;
     c->init_speed_mps = fc.init_speed_mps;
     c->init_speed_sd = fc.init_speed_sd;
+    c->roughening_k = fc.roughening_k;
+    c->e_blur_sd = fc.e_blur_sd;
     c->declare_threshold = fc.declare_threshold;
     c->declare_hold_s = fc.declare_hold_s;
     c->gate_m = fc.gate_m;
@@ -689,6 +695,8 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->dt_nominal_s = c->dt_nominal_s;
     fc->init_speed_mps = c->init_speed_mps;
     fc->init_speed_sd = c->init_speed_sd;
+    fc->roughening_k = c->roughening_k;
+    fc->e_blur_sd = c->e_blur_sd;
     fc->declare_threshold = c->declare_threshold;
     fc->declare_hold_s = c->declare_hold_s;
     fc->gate_m = c->gate_m;

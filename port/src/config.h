@@ -38,6 +38,7 @@ typedef struct {
     hstpf_dist_spec_t noise_s, noise_v, noise_e;
     double dt_nominal_s;
     double init_speed_mps, init_speed_sd;
+    double roughening_k, e_blur_sd;
     double declare_threshold, declare_hold_s;
     double gate_m;
     /* train and inputs */

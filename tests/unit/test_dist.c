@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "dist_impl.h"
 #include "testutil.h"
 #ifdef HSTPF_TEST_HAVE_SIM
 #include "hstpf_sim.h"
@@ -876,9 +877,73 @@ static int setup(void **state)
     return 0;
 }
 
+/* Blurred log-density (hstpf__dist_blur, cfg.e_blur_sd): Gamma(0.5, 0.2) + N(0, 0.1)
+ * against an independent quadrature (g = u^2 removes the edge singularity:
+ * p(x) = int 2 exp(-u^2/th) / sqrt(pi th) phi((x - u^2)/sd) / sd du), its
+ * mass and mean; other kinds and sd <= 0 are refused. */
+static double blur_ref(double x, double th, double sd)
+{
+    const int n = 200000;
+    const double umax = sqrt(40.0 * th + x + 10.0 * sd > 0.0 ? 40.0 * th + x + 10.0 * sd : 1.0);
+    double acc = 0.0;
+    int j;
+    for (j = 0; j < n; ++j) {
+        const double u = umax * (j + 0.5) / n, z = (x - u * u) / sd;
+        acc += 2.0 * exp(-u * u / th) / sqrt(3.14159265358979 * th) * exp(-0.5 * z * z) /
+               (sd * 2.5066282746310002) * (umax / n);
+    }
+    return acc;
+}
+
+static void test_logpdf_blur(void **state)
+{
+    hstpf_dist_spec_t s;
+    hstpf_dist_t d, g;
+    double mass = 0.0, m1 = 0.0, x;
+    const double dx = 1e-3;
+    static const double xs[] = {-0.3, -0.1, 0.0, 0.02, 0.1, 0.3, 1.0, 2.0};
+    unsigned i;
+    (void)state;
+    memset(&s, 0, sizeof s);
+    s.kind = HSTPF_DIST_GAMMA;
+    s.shape = 0.5;
+    s.scale = 0.2;
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.1), HSTPF_OK);
+    for (i = 0; i < sizeof xs / sizeof xs[0]; ++i) {
+        const double ref = log(blur_ref(xs[i], 0.2, 0.1));
+        const double got = (double)hstpf_dist_logpdf(&d, (hstpf_real_t)xs[i]);
+        if (fabs(got - ref) > 5e-3) {
+            fail_msg("blurred Gamma at %g: %g, reference %g", xs[i], got, ref);
+        }
+    }
+    for (x = -1.0; x < 6.0; x += dx) {
+        const double p = exp((double)hstpf_dist_logpdf(&d, (hstpf_real_t)x));
+        mass += p * dx;
+        m1 += x * p * dx;
+    }
+    assert_true(fabs(mass - 1.0) < 2e-3);
+    assert_true(fabs(m1 - 0.1) < 2e-3);
+    /* left of the edge it falls, never below the floor, finite */
+    assert_true(hstpf_dist_logpdf(&d, -0.5f) < hstpf_dist_logpdf(&d, -0.2f));
+    assert_true(hstpf_dist_logpdf(&d, -1e6f) >= d.floor - d.dd_max * d.floor_slope);
+
+    /* only Gamma: a blurred Gaussian is a wider Gaussian, built by the
+     * filter itself (test_errors checks the configuration errors) */
+    gauss_spec(&s, 1.0, 0.3);
+    assert_int_equal(hstpf_dist_init(&g, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&g, &s, 0.4), HSTPF_E_DIST);
+    assert_int_equal(hstpf__dist_blur(&d, &cases[6].spec, 0.1), HSTPF_E_DIST); /* table */
+    s.kind = HSTPF_DIST_GAMMA;
+    s.shape = 0.5;
+    s.scale = 0.2;
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.0), HSTPF_E_DIST);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_logpdf_blur),
         cmocka_unit_test(test_reference_cdfs),
         cmocka_unit_test(test_sampler_accuracy),
         cmocka_unit_test(test_samples),

@@ -137,6 +137,7 @@ static void test_init_errors(void **state)
         BAD(bc_.rough_min_s = b, HSTPF_E_NONFINITE);
         BAD(bc_.rough_min_v = b, HSTPF_E_NONFINITE);
         BAD(bc_.q_floor = b, HSTPF_E_NONFINITE);
+        BAD(bc_.e_blur_sd = b, HSTPF_E_NONFINITE);
         BAD(bc_.declare_threshold = b, HSTPF_E_NONFINITE);
         BAD(bc_.declare_hold_s = b, HSTPF_E_NONFINITE);
         BAD(bc_.gate_m = b, HSTPF_E_NONFINITE);
@@ -217,6 +218,11 @@ static void test_init_errors(void **state)
     BAD(bc_.dt_nominal_s = 0.0, HSTPF_E_CONFIG);
     BAD(bc_.dt_nominal_s = -1.0, HSTPF_E_CONFIG);
     BAD(bc_.dt_nominal_s = HSTPF_DT_MAX_S + 0.1, HSTPF_E_CONFIG);
+    BAD(bc_.engine = (hstpf_engine_t)3, HSTPF_E_CONFIG);
+    BAD((bc_.engine = HSTPF_ENGINE_KALMAN, bc_.noise_v.kind = HSTPF_DIST_GAMMA, bc_.noise_v.shape = 0.1,
+         bc_.noise_v.scale = 0.05), HSTPF_E_CONFIG);
+    BAD(bc_.e_blur_sd = -0.1, HSTPF_E_CONFIG);
+    BAD((bc_.noise_e.kind = HSTPF_DIST_TABLE, bc_.e_blur_sd = 0.1), HSTPF_E_CONFIG);
     /* noise specifications (hstpf_dist_init's checks) */
     BAD(bc_.noise_s.sd = 0.0, HSTPF_E_DIST);
     BAD(bc_.noise_v.kind = (hstpf_dist_kind_t)7, HSTPF_E_DIST);

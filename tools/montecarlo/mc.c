@@ -44,6 +44,7 @@ typedef struct {
     double par_err_max_after[3]; /* max after the decision */
     double w_rms;               /* RMS relative error of W(v), 0..350 km/h, at the end */
     double pos_rms, spd_rms;    /* over the run after the first 60 s */
+    double pos_bias;            /* mean signed position error (estimate - truth), same span */
     uint32_t floor_hits_true;
     double q_true_end;
 } run_t;
@@ -94,7 +95,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     hstpf_sim_t sim;
     hstpf_estimate_t est;
     hstpf_sim_sample_t smp;
-    double last_below = 0.0, se_p = 0.0, se_v = 0.0;
+    double last_below = 0.0, se_p = 0.0, se_v = 0.0, sb_p = 0.0;
     long n_err = 0;
     int k;
     if (f == NULL) {
@@ -166,6 +167,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         }
         if (smp.t >= 60.0) {
             se_p += (est.position_m - smp.s) * (est.position_m - smp.s);
+            sb_p += est.position_m - smp.s;
             se_v += ((double)est.speed_mps - smp.v) * ((double)est.speed_mps - smp.v);
             ++r->floor_hits_true; /* reused below as a sample count */
         }
@@ -195,6 +197,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     }
     r->pos_rms = sqrt(se_p / (r->floor_hits_true ? r->floor_hits_true : 1u));
     r->spd_rms = sqrt(se_v / (r->floor_hits_true ? r->floor_hits_true : 1u));
+    r->pos_bias = sb_p / (r->floor_hits_true ? r->floor_hits_true : 1u);
     r->floor_hits_true = est.model[truth].floor_hits;
     r->q_true_end = (double)est.model[truth].q;
     r->success = r->q_true_end > thr;
@@ -272,8 +275,8 @@ static void usage(void)
             "  [--truth NAME] [--json FILE] [--trace FILE]\n"
             "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
-            "  [--bank paired|independent] [--rough K] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
-            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X]\n"
+            "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
+            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD]\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -343,6 +346,8 @@ int main(int argc, char **argv)
             st.base.bank = !strcmp(v, "independent") ? HSTPF_BANK_INDEPENDENT : HSTPF_BANK_PAIRED;
         } else if (!strcmp(a, "--rough")) {
             st.base.roughening_k = atof(v);
+        } else if (!strcmp(a, "--rough-min-s")) {
+            st.base.rough_min_s = atof(v);
         } else if (!strcmp(a, "--rough-min-v")) {
             st.base.rough_min_v = atof(v);
         } else if (!strcmp(a, "--weights")) {
@@ -356,6 +361,8 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--floor-depth")) {
             st.floor_depth = atof(v);
             st.floor_set = 1;
+        } else if (!strcmp(a, "--e-blur")) {
+            st.base.e_blur_sd = atof(v);
         } else if (!strcmp(a, "--edge-soft")) {
             st.edge_soft = atof(v);
             st.soft_set = 1;
@@ -431,13 +438,13 @@ int main(int argc, char **argv)
     }
     printf("scenario %s: %d models, %d seeds, %.0f s, M = %u\n", sc.name, n_models, seeds,
            sc.duration_s, (unsigned)st.base.n_particles);
-    printf("%-24s %7s %7s %7s %7s %7s %6s %6s %7s %7s %5s %7s %7s\n", "truth", "success", "x_med",
-           "x_p90", "x_max", "t_med", "false", "undec", "c_err", "W_rms", "W>5%", "pos_rms", "spd_rms");
+    printf("%-24s %7s %7s %7s %7s %7s %6s %6s %7s %7s %5s %7s %7s %8s\n", "truth", "success", "x_med",
+           "x_p90", "x_max", "t_med", "false", "undec", "c_err", "W_rms", "W>5%", "pos_rms", "spd_rms", "pos_bias");
     for (j = 0; j < w.n_jobs; ++j) {
         const run_t *rr = &w.runs[j * seeds];
         double *td = malloc(sizeof(double) * (size_t)seeds), *tx = malloc(sizeof(double) * (size_t)seeds);
         int ns = 0, nd = 0, nx = 0, nf = 0, nu = 0, nw = 0;
-        double cerr = 0.0, wsum = 0.0, prms = 0.0, vrms = 0.0;
+        double cerr = 0.0, wsum = 0.0, prms = 0.0, vrms = 0.0, pbias = 0.0;
         for (i = 0; i < seeds; ++i) {
             ns += rr[i].success;
             nf += rr[i].false_decl;
@@ -453,11 +460,13 @@ int main(int argc, char **argv)
             nw += rr[i].w_rms > 0.05;
             prms += rr[i].pos_rms * rr[i].pos_rms;
             vrms += rr[i].spd_rms * rr[i].spd_rms;
+            pbias += rr[i].pos_bias;
         }
-        printf("%-24s %6.1f%% %7.0f %7.0f %7.0f %7.0f %5.1f%% %5.1f%% %6.2f%% %6.2f%% %5d %7.2f %7.3f\n",
+        printf("%-24s %6.1f%% %7.0f %7.0f %7.0f %7.0f %5.1f%% %5.1f%% %6.2f%% %6.2f%% %5d %7.2f %7.3f %+8.3f\n",
                models[truths[j]].name, 100.0 * ns / seeds, pct(tx, nx, 0.5), pct(tx, nx, 0.9),
                pct(tx, nx, 1.0), pct(td, nd, 0.5), 100.0 * nf / seeds, 100.0 * nu / seeds,
-               100.0 * cerr / seeds, 100.0 * wsum / seeds, nw, sqrt(prms / seeds), sqrt(vrms / seeds));
+               100.0 * cerr / seeds, 100.0 * wsum / seeds, nw, sqrt(prms / seeds), sqrt(vrms / seeds),
+               pbias / seeds);
         tot_s += ns;
         tot_f += nf;
         tot_w += nw;

@@ -186,6 +186,18 @@ typedef struct {
     uint16_t model_reacquire_after;
     const hstpf_track_seg_t *track; /**< optional profile, copied at init */
     uint16_t n_track;            /**< 0..HSTPF_MAX_TRACK_SEGMENTS */
+    /** Particle engine: the measurement likelihood is the density of
+     *  e + d, d ~ N(0, e_blur_sd), m: e's log-density table is replaced at
+     *  init by its exact convolution with that Gaussian (Gaussian or Gamma
+     *  e; a TABLE e gives HSTPF_E_CONFIG). A proper, bounded density with
+     *  no hard edge, so edge_soft is unused: a Gamma e's unbounded peak
+     *  and one-sided support otherwise make the particle weights (and the
+     *  model likelihoods) heavy-tailed and lose clouds that run slightly
+     *  ahead (docs/results.md, Case 2). The first-fix cloud still draws a
+     *  Gamma e itself; a blurred Gaussian e is simply a wider Gaussian. The
+     *  Kalman engine ignores it. Init cost with a Gamma e: a few 10^5
+     *  exp/pow calls (docs/footprint.md). 0 = none (0). */
+    double e_blur_sd;
 } hstpf_config_t;
 
 /** One step's inputs. */
