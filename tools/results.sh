@@ -12,8 +12,9 @@ out=out/results
 mkdir -p "$out" docs/img
 # One setting for every case and truth; only the noise model is the case's.
 # Library defaults otherwise: engine auto (Kalman for Gaussian noise,
-# particles for Gamma), M = 100, declaration at q > 0.99 held 30 s.
-settings=(--edge-soft 0.2)
+# particles for Gamma), M = 100, declaration at q > 0.99 held 30 s. The two
+# below act on the particle engine only.
+settings=(--e-blur 0.2 --rough 0.7)
 seeds=${HSTPF_SEEDS:-100}
 for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-known; do
   echo "== $s"
@@ -38,9 +39,15 @@ echo "== declaration rule (17 types, both engines)"
 echo "== Case 2 ablation"
 {
   echo "variant | result"
-  for v in "base:--edge-soft 0.2" "hard edge:--edge-soft 0" "no roughening:--edge-soft 0.2 --rough 0" \
-           "resample always:--edge-soft 0.2 --resample always" "paper Eq.13:--edge-soft 0.2 --weights paper" \
-           "shallow floor 10:--edge-soft 0.2 --floor-depth 10" "deep floor 1000:--edge-soft 0.2 --floor-depth 1000"; do
+  for v in "base:--e-blur 0.2 --rough 0.7" "no blur, soft edge 0.2:--edge-soft 0.2 --rough 0.7" \
+           "no blur, soft edge 0.2, roughening 0.2 (first session):--edge-soft 0.2" \
+           "no blur, hard edge:--rough 0.7" "roughening 0.2:--e-blur 0.2" "no roughening:--e-blur 0.2 --rough 0" \
+           "resample always:--e-blur 0.2 --rough 0.7 --resample always" \
+           "paper Eq.13:--e-blur 0.2 --rough 0.7 --weights paper" \
+           "shallow floor 10:--e-blur 0.2 --rough 0.7 --floor-depth 10" \
+           "deep floor 1000:--e-blur 0.2 --rough 0.7 --floor-depth 1000" \
+           "threshold 0.9:--e-blur 0.2 --rough 0.7 --threshold 0.9" \
+           "M = 256:--e-blur 0.2 --rough 0.7 --particles 256"; do
     name=${v%%:*}; args=${v#*:}
     # shellcheck disable=SC2086
     echo "$name | $("$mc" --scenario paper2 --seeds "$seeds" $args 2>/dev/null | tail -1)"
