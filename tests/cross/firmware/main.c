@@ -110,6 +110,25 @@ static void emit(char *line, char *end)
     fw_puts(line);
 }
 
+/* One run over the inputs with SysTick on: accepted steps and ticks. */
+static int timed_pass(const hstpf_config_t *cfg, uint32_t *ok, uint64_t *ticks)
+{
+    uint64_t t0;
+    uint32_t k;
+    *ok = 0u;
+    if (hstpf_init(&filt, sizeof filt, cfg) != HSTPF_OK) {
+        return -1;
+    }
+    fw_ticks_start();
+    t0 = fw_ticks();
+    for (k = 0u; k < N_STEPS; ++k) {
+        *ok += hstpf_step(&filt, &inputs[k]) == HSTPF_OK ? 1u : 0u;
+    }
+    *ticks = fw_ticks() - t0;
+    fw_ticks_stop();
+    return 0;
+}
+
 int main(void)
 {
     static const char *const names[3] = {"SS1/SS3/SS4", "CRH3", "SS8"};
@@ -186,46 +205,31 @@ int main(void)
         stack_step = stack_p > stack_step ? stack_p : stack_step;
     }
 
-    /* timed pass: the SysTick interrupt pushes frames, so it stays off
+    /* timed passes: the SysTick interrupt pushes frames, so it stays off
      * while the stack is measured above */
     {
-        uint64_t t0, t1;
-        uint32_t ok2 = 0u;
+        uint32_t ok2;
+        uint64_t ticks;
         hstpf_config_t pc = cfg;
         pc.engine = HSTPF_ENGINE_PARTICLE;
-        if (hstpf_init(&filt, sizeof filt, &pc) != HSTPF_OK) {
+        if (timed_pass(&pc, &ok2, &ticks) != 0) {
             return 1;
         }
-        fw_ticks_start();
-        t0 = fw_ticks();
-        for (k = 0u; k < N_STEPS; ++k) {
-            ok2 += hstpf_step(&filt, &inputs[k]) == HSTPF_OK ? 1u : 0u;
-        }
-        t1 = fw_ticks();
-        fw_ticks_stop();
         p = put_s(line, "m4f: timed pass: ");
         p = put_u(p, ok2);
         p = put_s(p, " steps of 3 models x ");
         p = put_u(p, cfg.n_particles);
         p = put_s(p, " particles in ");
-        p = put_u(p, t1 - t0);
+        p = put_u(p, ticks);
         emit(line, put_s(p, " SysTick counts"));
         pc.engine = HSTPF_ENGINE_KALMAN;
-        if (hstpf_init(&filt, sizeof filt, &pc) != HSTPF_OK) {
+        if (timed_pass(&pc, &ok2, &ticks) != 0) {
             return 1;
         }
-        ok2 = 0u;
-        fw_ticks_start();
-        t0 = fw_ticks();
-        for (k = 0u; k < N_STEPS; ++k) {
-            ok2 += hstpf_step(&filt, &inputs[k]) == HSTPF_OK ? 1u : 0u;
-        }
-        t1 = fw_ticks();
-        fw_ticks_stop();
         p = put_s(line, "m4f: timed Kalman pass: ");
         p = put_u(p, ok2);
         p = put_s(p, " steps of 3 models in ");
-        p = put_u(p, t1 - t0);
+        p = put_u(p, ticks);
         emit(line, put_s(p, " SysTick counts"));
     }
 
