@@ -301,17 +301,23 @@ static void place_cloud(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
     m->ess = (real)n;
 }
 
+/* The paired bank's common draws and resampling: particles only. */
+static int paired_bank(const hstpf_t *f)
+{
+    return !f->kalman && f->cfg.bank == HSTPF_BANK_PAIRED;
+}
+
 /* Particles from the first fix, with the speed prior. The paired bank gives
  * every model the same particles. */
 static void first_fix(hstpf_t *f, double y)
 {
     uint16_t l;
-    const int paired = f->cfg.bank == HSTPF_BANK_PAIRED;
+    const int paired = paired_bank(f);
     real yr;
     f->origin_m = floor(y);
     yr = (real)(y - f->origin_m);
     track_rebase(f);
-    if (paired && !f->kalman) {
+    if (paired) {
         draw_fix(f, &f->rng);
     }
     for (l = 0; l < f->cfg.n_models; ++l) {
@@ -809,11 +815,11 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         yr = (real)(in->position_m - f->origin_m);
     }
     {
-        const int paired = f->cfg.bank == HSTPF_BANK_PAIRED;
+        const int paired = paired_bank(f);
         const real dt = (real)in->dt_s, xu = (real)(f->xi * in->traction);
         const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles;
         double ess_mix = 0.0;
-        if (paired && !f->kalman) {
+        if (paired) {
             draw_noise(f, &f->rng, scale);
         }
         for (l = 0; l < f->cfg.n_models; ++l) {
@@ -846,10 +852,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
                 }
             }
         }
-        for (l = 0; paired && !f->kalman && l < f->cfg.n_models; ++l) {
+        for (l = 0; paired && l < f->cfg.n_models; ++l) {
             ess_mix += exp(f->m[l].logq) * (double)f->m[l].ess;
         }
-        if (paired && !f->kalman && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || ess_mix < (double)thr)) {
+        if (paired && has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || ess_mix < (double)thr)) {
             resample_paired(f);
         }
     }

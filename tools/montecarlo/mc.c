@@ -95,7 +95,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     hstpf_sim_t sim;
     hstpf_estimate_t est;
     hstpf_sim_sample_t smp;
-    double last_below = 0.0, se_p = 0.0, se_v = 0.0, sb_p = 0.0;
+    double last_below = 0.0, se_p = 0.0, se_v = 0.0, sb_p = 0.0, n_after = 0.0;
     long n_err = 0;
     int k;
     if (f == NULL) {
@@ -169,7 +169,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             se_p += (est.position_m - smp.s) * (est.position_m - smp.s);
             sb_p += est.position_m - smp.s;
             se_v += ((double)est.speed_mps - smp.v) * ((double)est.speed_mps - smp.v);
-            ++r->floor_hits_true; /* reused below as a sample count */
+            n_after += 1.0;
         }
         if (est.declared == truth && r->t_declare >= 0.0) {
             for (k = 0; k < 3; ++k) {
@@ -195,9 +195,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             fprintf(trace, "\n");
         }
     }
-    r->pos_rms = sqrt(se_p / (r->floor_hits_true ? r->floor_hits_true : 1u));
-    r->spd_rms = sqrt(se_v / (r->floor_hits_true ? r->floor_hits_true : 1u));
-    r->pos_bias = sb_p / (r->floor_hits_true ? r->floor_hits_true : 1u);
+    n_after = n_after > 0.0 ? n_after : 1.0;
+    r->pos_rms = sqrt(se_p / n_after);
+    r->spd_rms = sqrt(se_v / n_after);
+    r->pos_bias = sb_p / n_after;
     r->floor_hits_true = est.model[truth].floor_hits;
     r->q_true_end = (double)est.model[truth].q;
     r->success = r->q_true_end > thr;
