@@ -45,6 +45,8 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->q_floor = 1e-9;
     cfg->declare_threshold = 0.99;
     cfg->declare_hold_s = 30.0;
+    cfg->withdraw_threshold = 0.5;
+    cfg->max_gap_s = 30.0;
     cfg->gate_m = 1000.0;
     cfg->reacquire_after = 5;
     return HSTPF_OK;
@@ -126,6 +128,22 @@ static int32_t check_config(const hstpf_config_t *c)
     }
     if (err == HSTPF_OK) {
         err = hstpf__dist_check(&c->noise_e);
+    }
+    return err;
+}
+
+int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field)
+{
+    int32_t err;
+    if (field != NULL) {
+        *field = "";
+    }
+    if (cfg == NULL) {
+        return HSTPF_E_NULL;
+    }
+    err = check_config(cfg);
+    if (err != HSTPF_OK && field != NULL) {
+        *field = "config";
     }
     return err;
 }

@@ -169,6 +169,14 @@ typedef struct {
      *  even with exact likelihoods (docs/results.md). */
     double declare_threshold;
     double declare_hold_s;       /**< tau: how long it must stay above (30 s) */
+    /** A declared type whose q falls below this is withdrawn (status
+     *  WITHDRAWN, declared -1); [q_floor, declare_threshold] (0.5). */
+    double withdraw_threshold;
+    /** Longest step the filter predicts across, s: a longer gap between
+     *  accepted inputs (an outage, a clock step) drops the lock and the
+     *  filter re-acquires from the next fixes, keeping the model weights;
+     *  (0, HSTPF_DT_MAX_S] (30). */
+    double max_gap_s;
     /** Measurements farther than this from the predicted position are
      *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
     double gate_m;
@@ -208,11 +216,25 @@ typedef struct {
     uint8_t has_position; /**< 0: no measurement this step, predict only */
 } hstpf_input_t;
 
-/** Declaration status (Table 2, State A(2)). */
+/**
+ * Declaration status (Table 2, State A(2)), a state machine:
+ *
+ *   UNDECIDED --(leader q > declare_threshold held declare_hold_s)--> DECLARED
+ *   DECLARED  --(declared q < withdraw_threshold)-----------------> WITHDRAWN
+ *   WITHDRAWN --(a leader held as above; same or other type)------> DECLARED
+ *   DECLARED  --(another type held as above)----------------------> CHANGED
+ *   CHANGED   --(declared q < withdraw_threshold)-----------------> WITHDRAWN
+ *   any       --(hstpf_reset)--------------------------------------> UNDECIDED
+ *
+ * declared >= 0 exactly when the status is DECLARED or CHANGED, and then
+ * theta is the declared row's theta. In UNDECIDED and WITHDRAWN, declared
+ * is -1 and theta is the weight blend.
+ */
 typedef enum {
     HSTPF_STATUS_UNDECIDED = 0, /**< no type declared yet */
     HSTPF_STATUS_DECLARED = 1,  /**< a type is declared */
-    HSTPF_STATUS_CHANGED = 2    /**< a different type replaced the declared one */
+    HSTPF_STATUS_CHANGED = 2,   /**< a different type replaced the declared one */
+    HSTPF_STATUS_WITHDRAWN = 3  /**< the declared type lost its weight; none declared */
 } hstpf_status_t;
 
 /** Per-model output. */
@@ -235,6 +257,18 @@ typedef struct {
      *  same b_l blend speed and theta. */
     double position_m;
     hstpf_real_t speed_mps; /**< blended speed, m/s */
+    /** Standard deviations of the blended posterior (the mixture over the
+     *  models, so the spread between models is included), m and m/s. */
+    double position_sd_m;
+    hstpf_real_t speed_sd_mps;
+    /** 1 when every published value is finite and within the ranges this
+     *  header documents and the filter has lock on the train (acquired from
+     *  fixes and not lost since); 0 otherwise: consumers must not use the
+     *  states, theta or resistance. */
+    uint8_t valid;
+    /** 1 while the train is held at standstill (docs/model.md): the model
+     *  weights are not updated. */
+    uint8_t standstill;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)) */
     hstpf_real_t resistance; /**< W(speed) with theta, N/kN */
     int16_t best;           /**< index of the largest q_l */
@@ -243,6 +277,8 @@ typedef struct {
     double decision_time_s; /**< time of the latest declaration, -1 if none */
     uint32_t outliers;      /**< measurements rejected by the gate */
     uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
+    uint32_t acquisitions;  /**< lock (re)acquired from fixes: start, outage, gated run, time step */
+    uint32_t nonfinite_resets; /**< times the filter went non-finite and was re-initialised */
     uint16_t n_models;
     hstpf_model_out_t model[HSTPF_MAX_MODELS];
 } hstpf_estimate_t;
@@ -303,6 +339,17 @@ typedef struct {
  * @return HSTPF_OK or HSTPF_E_NULL. Cost O(1).
  */
 int32_t hstpf_config_default(hstpf_config_t *cfg);
+
+/**
+ * @brief Checks a configuration against the library's one table of ranges
+ * (the same check hstpf_init() makes), without an instance.
+ * @param cfg    configuration to check.
+ * @param field  if not NULL, set to the name of the first failing field
+ *               (e.g. "noise_e.sd", "models[3].c1"), or to "" when valid.
+ * @return HSTPF_OK or the error hstpf_init() would return. Cost
+ *   O(n_models + n_track); no memory.
+ */
+int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field);
 
 /**
  * @brief Initialises an instance: validates cfg, copies the models and the
