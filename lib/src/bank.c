@@ -32,6 +32,7 @@ const hstpf__engine_t *hstpf__engine_of(const hstpf_t *f)
 {
     switch ((hstpf_engine_t)f->engine) {
     case HSTPF_ENGINE_KALMAN: return &hstpf__engine_kalman;
+    case HSTPF_ENGINE_GRID: return &hstpf__engine_grid;
     default: return &hstpf__engine_particle;
     }
 }

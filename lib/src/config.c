@@ -136,7 +136,7 @@ static int32_t check_track(const hstpf_config_t *c, const char **field)
 static int32_t check_enums(const hstpf_config_t *c, const char **field)
 {
     if (c->engine != HSTPF_ENGINE_PARTICLE && c->engine != HSTPF_ENGINE_KALMAN &&
-        c->engine != HSTPF_ENGINE_AUTO) {
+        c->engine != HSTPF_ENGINE_AUTO && c->engine != HSTPF_ENGINE_GRID) {
         return fail(field, "engine", HSTPF_E_CONFIG);
     }
     if (c->engine == HSTPF_ENGINE_KALMAN && !hstpf__all_gaussian(c)) {

@@ -33,6 +33,7 @@ typedef struct {
 
 extern const hstpf__engine_t hstpf__engine_particle;
 extern const hstpf__engine_t hstpf__engine_kalman;
+extern const hstpf__engine_t hstpf__engine_grid;
 
 /* The engine of a validated configuration (AUTO resolved). */
 hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg);

@@ -333,6 +333,8 @@ int main(int argc, char **argv)
                 st.base.engine = HSTPF_ENGINE_PARTICLE;
             } else if (!strcmp(v, "kalman")) {
                 st.base.engine = HSTPF_ENGINE_KALMAN;
+            } else if (!strcmp(v, "grid")) {
+                st.base.engine = HSTPF_ENGINE_GRID;
             } else {
                 usage();
                 return 2;

@@ -130,9 +130,21 @@ typedef enum {
      *  Huber update), so an outlier moves the state by a bounded amount. */
     HSTPF_ENGINE_KALMAN = 1,
     /** KALMAN when noise_s, noise_v and noise_e are all Gaussian, else
-     *  PARTICLE: the exact likelihood where it exists, particles where
-     *  the noise is not Gaussian. */
-    HSTPF_ENGINE_AUTO = 2
+     *  GRID: the exact likelihood where it exists, the deterministic grid
+     *  where the noise is not Gaussian. */
+    HSTPF_ENGINE_AUTO = 2,
+    /** A deterministic grid (point-mass) filter per model: the density of
+     *  (s, v) on HSTPF_GRID_NS x HSTPF_GRID_NV cells that move and resize
+     *  with the posterior every step; the time update transports the cells
+     *  by the dynamics and convolves with the process-noise densities, the
+     *  measurement update integrates the measurement density over each
+     *  cell (one-sided and unbounded densities such as Gamma(0.5) need no
+     *  blur). Any noise; no RNG, so the model likelihoods carry no Monte
+     *  Carlo noise and runs are bit-for-bit repeatable. n_particles, bank,
+     *  resampling, roughening, e_blur_sd and weight_method are unused; the
+     *  track profile is evaluated at each model's mean position. Cost per
+     *  model-step O(cells x kernel width), see docs/grid.md. */
+    HSTPF_ENGINE_GRID = 3
 } hstpf_engine_t;
 
 /** Configuration; fill with hstpf_config_default() then change fields. */
@@ -290,6 +302,36 @@ typedef struct {
     hstpf_model_out_t model[HSTPF_MAX_MODELS];
 } hstpf_estimate_t;
 
+/*
+ * Grid engine capacity: cells per model in position x speed. Override with
+ * -D when building the library and its users (they size hstpf_t).
+ */
+#ifndef HSTPF_GRID_NS
+#define HSTPF_GRID_NS 48 /**< grid cells in position */
+#endif
+#ifndef HSTPF_GRID_NV
+#define HSTPF_GRID_NV 48 /**< grid cells in speed */
+#endif
+#if HSTPF_GRID_NS < 8 || HSTPF_GRID_NV < 8 || HSTPF_GRID_NS > 1024 || HSTPF_GRID_NV > 1024
+#error "HSTPF_GRID_NS and HSTPF_GRID_NV must be in [8, 1024]"
+#endif
+#define HSTPF__GRID_CELLS (HSTPF_GRID_NS * HSTPF_GRID_NV)
+#define HSTPF__GRID_K (2 * (HSTPF_GRID_NS > HSTPF_GRID_NV ? HSTPF_GRID_NS : HSTPF_GRID_NV) + 2)
+
+/* Private: the grid engine's memory (unused by the other engines). */
+typedef struct {
+    hstpf_real_t p[HSTPF_MAX_MODELS][HSTPF__GRID_CELLS]; /* cell masses, row j = speed cell */
+    hstpf_real_t geom[HSTPF_MAX_MODELS][4];              /* s0, ds, v0, dv: first edges, widths */
+    hstpf_real_t pred_mass[HSTPF_MAX_MODELS];            /* mass kept by the last prediction */
+    hstpf_real_t work[HSTPF__GRID_CELLS];                /* the transported grid */
+    hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
+    hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
+    hstpf_real_t vimg[HSTPF_GRID_NV + 1];                /* speed-cell edges after the dynamics */
+    hstpf_real_t ks[HSTPF__GRID_K], kv[HSTPF__GRID_K];   /* process-noise kernels */
+    int16_t first[HSTPF_GRID_NV], last[HSTPF_GRID_NV];   /* occupied cells of each row */
+    int16_t box[4];                                      /* occupied rows and columns of work */
+} hstpf_grid_ws_t;
+
 /* Private per-model state. */
 typedef struct {
     hstpf_real_t s[HSTPF_MAX_PARTICLES];  /* position relative to origin */
@@ -338,6 +380,7 @@ typedef struct {
     uint16_t outlier_run;            /* consecutive gated measurements */
     uint8_t have_fix;
     uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
+    hstpf_grid_ws_t grid;            /* the grid engine's cells */
 } hstpf_t;
 
 /**

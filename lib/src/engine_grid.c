@@ -1,0 +1,729 @@
+/* Grid engine: a deterministic point-mass filter per model (Bucy & Senne;
+ * Simandl, Kralovec & Soderstrom). The density of (s, v) lives on
+ * HSTPF_GRID_NS x HSTPF_GRID_NV uniform cells that are placed again every
+ * step around the predicted support. One step:
+ *   1. the support of the posterior (its marginal quantiles at GRID_TAIL)
+ *      is carried through the dynamics and widened by the process-noise
+ *      quantiles: the new grid, asymmetric where the noise is;
+ *   2. every cell is transported by the dynamics (positions by T v, speeds
+ *      through v + T a(v) with the no-reversal clamp) and its mass is
+ *      shared among the new cells it overlaps (conservative remap);
+ *   3. the process noise is convolved in, speed then position, with
+ *      kernels of cell masses taken from the noise's CDF (any density);
+ *   4. each position cell is weighted by the measurement density
+ *      integrated over the cell (exact for one-sided and unbounded
+ *      densities), with the library's floor; the sum is the model's
+ *      likelihood increment.
+ * No RNG, no heap: the memory is hstpf_t.grid. docs/grid.md. */
+#include <math.h>
+#include <string.h>
+
+#include "dist_impl.h"
+#include "engine.h"
+#include "internal.h"
+#include "track.h"
+
+typedef hstpf_real_t real;
+
+#define NS HSTPF_GRID_NS
+#define NV HSTPF_GRID_NV
+#define QN ((int)HSTPF_DIST_QN)
+#define GRID_TAIL ((real)1e-7)  /* mass left out on each side of a box */
+#define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
+#define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
+#define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
+
+/* ---- CDF of a built distribution, from its quantile tables ----------- */
+
+/* 2^(k-32) for k in [0, 32] */
+static real pow2m32(int k)
+{
+    return (real)ldexp(1.0, k - 32);
+}
+
+/* Tail probability at x between the nodes of a tail table (nodes at tail
+ * probability 2^(k-32)), the inverse of hstpf__dist_tail's interpolation.
+ * x is on the tail's side of tab[QSHIFT]; dir = +1 for the lower tail
+ * (nodes increase), -1 for the upper. */
+static real tail_prob(const real *tab, real x, int dir)
+{
+    int k;
+    if ((real)dir * (x - tab[0]) < (real)0) {
+        return 0;
+    }
+    for (k = 0; k < HSTPF__QSHIFT; ++k) {
+        if ((real)dir * (x - tab[k + 1]) < (real)0) {
+            const real w = tab[k + 1] - tab[k];
+            const real fr = w != (real)0 ? (x - tab[k]) / w : (real)1;
+            return pow2m32(k) * ((real)1 + fr);
+        }
+    }
+    return pow2m32(HSTPF__QSHIFT);
+}
+
+/* P(X <= x) into *lo and P(X > x) into *hi, each computed on its own side
+ * so that neither loses the small tail to round-off. Consistent with the
+ * sampler: the exact probability at every quantile node, linear between. */
+static void cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
+{
+    int a = 1, b = QN - 1;
+    real u;
+    if (!(x >= d->q[1])) {
+        *lo = tail_prob(d->tail_lo, x, 1);
+        *hi = (real)1 - *lo;
+        return;
+    }
+    if (x >= d->q[QN - 1]) {
+        *hi = tail_prob(d->tail_hi, x, -1);
+        *lo = (real)1 - *hi;
+        return;
+    }
+    while (b - a > 1) { /* q[a] <= x < q[b] */
+        const int c = (a + b) / 2;
+        if (x >= d->q[c]) {
+            a = c;
+        } else {
+            b = c;
+        }
+    }
+    u = d->q[b] > d->q[a] ? (x - d->q[a]) / (d->q[b] - d->q[a]) : (real)0;
+    *lo = ((real)a + u) / (real)QN;
+    *hi = ((real)(QN - a) - u) / (real)QN;
+}
+
+/* P(a < X <= b), a <= b. */
+static real prob_in(const hstpf_dist_t *d, real a, real b)
+{
+    real la, ha, lb, hb, p;
+    cdf2(d, a, &la, &ha);
+    cdf2(d, b, &lb, &hb);
+    p = ha < (real)0.5 ? ha - hb : lb - la;
+    return p > (real)0 ? p : (real)0;
+}
+
+/* Quantile at probability GRID_TAIL (upper = 0) or 1 - GRID_TAIL: the
+ * sampler's own inverse CDF at that point. */
+static real tail_quantile(const hstpf_dist_t *d, int upper)
+{
+    const uint32_t r = (uint32_t)(GRID_TAIL * (real)4294967296.0);
+    return hstpf__dist_sample(d, upper ? ~r : r);
+}
+
+/* ---- densities integrated over cells ---------------------------------- */
+
+/* Mean of exp over a segment on which the log-density is linear from l0 to
+ * l1 (both <= 0). */
+static real mean_exp(real l0, real l1)
+{
+    const real dl = l1 - l0;
+    if (dl > (real)1e-3 || dl < (real)-1e-3) {
+        return (hstpf__exp_neg(l1) - hstpf__exp_neg(l0)) / dl;
+    }
+    return hstpf__exp_neg((real)0.5 * (l0 + l1));
+}
+
+/* Integral of exp(logpdf(x) - lp_max) over [a, b], a <= b: the table's own
+ * piecewise log-linear density inside its range, midpoints outside it. */
+static real dens_int(const hstpf_dist_t *d, real a, real b)
+{
+    const real top = d->lo + (real)(HSTPF_DIST_LN - 1) * d->dx;
+    real sum = 0, t0, t1;
+    if (a < d->lo) {
+        const real x1 = b < d->lo ? b : d->lo;
+        sum += (x1 - a) * hstpf__exp_neg(hstpf__dist_logpdf(d, (real)0.5 * (a + x1)) - d->lp_max);
+    }
+    if (b > top) {
+        const real x0 = a > top ? a : top;
+        sum += (b - x0) * hstpf__exp_neg(hstpf__dist_logpdf(d, (real)0.5 * (x0 + b)) - d->lp_max);
+    }
+    t0 = ((a > d->lo ? a : d->lo) - d->lo) * d->inv_dx;
+    t1 = ((b < top ? b : top) - d->lo) * d->inv_dx;
+    t1 = t1 < (real)(HSTPF_DIST_LN - 1) ? t1 : (real)(HSTPF_DIST_LN - 1); /* round-off */
+    while (t0 < t1) {
+        int32_t j = (int32_t)t0;
+        real te, l0, l1;
+        j = j > HSTPF_DIST_LN - 2 ? HSTPF_DIST_LN - 2 : j;
+        te = (real)(j + 1) < t1 ? (real)(j + 1) : t1;
+        if (!(te > t0)) {
+            break;
+        }
+        l0 = d->lp[j] + (t0 - (real)j) * (d->lp[j + 1] - d->lp[j]) - d->lp_max;
+        l1 = d->lp[j] + (te - (real)j) * (d->lp[j + 1] - d->lp[j]) - d->lp_max;
+        sum += (te - t0) * d->dx * mean_exp(l0 > 0 ? 0 : l0, l1 > 0 ? 0 : l1);
+        t0 = te;
+    }
+    return sum;
+}
+
+/* ---- grid pieces ------------------------------------------------------ */
+
+static real *geom(hstpf_t *f, uint16_t l)
+{
+    return f->grid.geom[l];
+}
+
+/* The no-reversal dynamics of the speed over one step. */
+static real speed_map(const hstpf_model_t *m, real v, real dt, real acc)
+{
+    const real vd = v + dt * (acc - m->k0 - (m->k1 + m->k2 * v) * v);
+    return (v >= (real)0 && vd < (real)0) ? (real)0 : vd;
+}
+
+/* Conservative remap: input cell i covers [a + i w, a + (i + 1) w] in units
+ * of output cells; its mass goes to the output cells it overlaps, in
+ * proportion. Mass beyond the output is dropped. */
+static void remap(const real *in, int i0, int i1, real a, real w, real *out, int n_out)
+{
+    const real inv = (real)1 / w;
+    int i;
+    for (i = i0; i <= i1; ++i) {
+        const real x0 = a + (real)i * w, x1 = x0 + w, m = in[i];
+        int k;
+        if (m <= MASS_MIN || x1 <= (real)0 || x0 >= (real)n_out) {
+            continue;
+        }
+        k = (int32_t)x0;
+        k -= (real)k > x0 ? 1 : 0; /* floor */
+        if (x1 <= (real)(k + 1)) { /* inside one output cell */
+            out[k] += m;
+        } else if (w <= (real)1 || x1 <= (real)(k + 2)) { /* across one edge */
+            const real fr = ((real)(k + 1) - x0) * inv;
+            if (k >= 0) {
+                out[k] += m * fr;
+            }
+            if (k + 1 < n_out) {
+                out[k + 1] += m - m * fr;
+            }
+        } else {
+            for (k = k > 0 ? k : 0; k < n_out && (real)k < x1; ++k) {
+                const real lo = x0 > (real)k ? x0 : (real)k;
+                const real hi = x1 < (real)(k + 1) ? x1 : (real)(k + 1);
+                if (hi > lo) {
+                    out[k] += m * (hi - lo) * inv;
+                }
+            }
+        }
+    }
+}
+
+/* Kernel of the noise scale * X on cells of width h: k[m - m0] = P(noise in
+ * cell m), m in [m0, m0 + n). Normalised to 1 (the mass beyond the
+ * GRID_TAIL quantiles is given back). Returns n >= 1; *m0 its first offset. */
+static int kernel(const hstpf_dist_t *d, real scale, real h, real *k, int *m0)
+{
+    const real lo = scale * tail_quantile(d, 0) / h, hi = scale * tail_quantile(d, 1) / h;
+    const int cap = HSTPF__GRID_K;
+    int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
+    real sum = 0;
+    if (b - a + 1 > cap) { /* cannot happen with the box margins; kept safe */
+        a = (a + b) / 2 - cap / 2;
+        b = a + cap - 1;
+    }
+    n = b - a + 1;
+    for (m = 0; m < n; ++m) {
+        const real c = (real)(a + m);
+        k[m] = scale > (real)0 ? prob_in(d, (c - (real)0.5) * h / scale, (c + (real)0.5) * h / scale) : (real)0;
+        sum += k[m];
+    }
+    if (!(sum > (real)0)) { /* no spread at this scale: a point mass at offset 0 */
+        const int z = a > 0 ? 0 : (b < 0 ? n - 1 : -a);
+        for (m = 0; m < n; ++m) {
+            k[m] = m == z ? (real)1 : (real)0;
+        }
+        sum = 1;
+    }
+    for (m = 0; m < n; ++m) {
+        k[m] /= sum;
+    }
+    *m0 = a;
+    return n;
+}
+
+/* Marginals of a model's cells into ms / mv; returns the total mass. */
+static real marginals(hstpf_t *f, const real *p)
+{
+    real tot = 0;
+    int i, j;
+    for (i = 0; i < NS; ++i) {
+        f->grid.ms[i] = 0;
+    }
+    for (j = 0; j < NV; ++j) {
+        const real *r = p + j * NS;
+        real rs = 0;
+        for (i = 0; i < NS; ++i) {
+            rs += r[i];
+            f->grid.ms[i] += r[i];
+        }
+        f->grid.mv[j] = rs;
+        tot += rs;
+    }
+    return tot;
+}
+
+/* Mean, variance (with the cells' own width) and effective cell count. */
+static void moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
+{
+    const real *p = f->grid.p[l], *g = geom(f, l);
+    double s1 = 0.0, s2 = 0.0, v1 = 0.0, v2 = 0.0, q2 = 0.0;
+    int i, j;
+    (void)marginals(f, p);
+    for (i = 0; i < NS; ++i) {
+        const double x = (double)g[0] + ((double)i + 0.5) * (double)g[1], w = (double)f->grid.ms[i];
+        s1 += w * x;
+        s2 += w * x * x;
+    }
+    for (j = 0; j < NV; ++j) {
+        const double x = (double)g[2] + ((double)j + 0.5) * (double)g[3], w = (double)f->grid.mv[j];
+        v1 += w * x;
+        v2 += w * x * x;
+    }
+    for (i = 0; i < NS * NV; ++i) {
+        q2 += (double)p[i] * (double)p[i];
+    }
+    m->s_mean = (real)s1;
+    m->v_mean = (real)v1;
+    (void)s2; /* posterior variances: for s_var / v_var */
+    (void)v2;
+    m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
+}
+
+/* ---- placement -------------------------------------------------------- */
+
+/* A model at the fix yr: s = yr - e with e the measurement noise, v from
+ * N(v0, init_speed_sd); cell masses from the two CDFs. */
+static void place_one(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+{
+    const uint16_t l = (uint16_t)(m - f->m);
+    real *p = f->grid.p[l], *g = geom(f, l);
+    const real sdv = (real)f->cfg.init_speed_sd;
+    const real zl = tail_quantile(&f->unit, 0), zh = tail_quantile(&f->unit, 1);
+    real s_lo = yr - tail_quantile(&f->de, 1), s_hi = yr - tail_quantile(&f->de, 0);
+    real v_lo = v0 + sdv * zl, v_hi = v0 + sdv * zh, tot = 0;
+    int i, j;
+    if (s_hi - s_lo < DS_MIN * (real)NS) {
+        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
+        s_hi = s_lo + DS_MIN * (real)NS;
+    }
+    if (v_hi - v_lo < DV_MIN * (real)NV) {
+        v_lo = v0 - (real)0.5 * DV_MIN * (real)NV;
+        v_hi = v_lo + DV_MIN * (real)NV;
+    }
+    g[0] = s_lo;
+    g[1] = (s_hi - s_lo) / (real)NS;
+    g[2] = v_lo;
+    g[3] = (v_hi - v_lo) / (real)NV;
+    for (i = 0; i < NS; ++i) { /* e in [yr - right edge, yr - left edge] */
+        const real x0 = g[0] + (real)i * g[1];
+        f->grid.ms[i] = prob_in(&f->de, yr - (x0 + g[1]), yr - x0);
+    }
+    for (j = 0; j < NV; ++j) {
+        const real x0 = g[2] + (real)j * g[3];
+        f->grid.mv[j] = sdv > (real)0 ? prob_in(&f->unit, (x0 - v0) / sdv, (x0 + g[3] - v0) / sdv)
+                                      : (real)(v0 >= x0 && v0 < x0 + g[3]);
+    }
+    for (j = 0; j < NV; ++j) {
+        for (i = 0; i < NS; ++i) {
+            p[j * NS + i] = f->grid.mv[j] * f->grid.ms[i];
+            tot += p[j * NS + i];
+        }
+    }
+    if (!(tot > (real)0)) { /* a prior narrower than a cell: all in the middle */
+        p[(NV / 2) * NS + NS / 2] = 1;
+        tot = 1;
+    }
+    for (i = 0; i < NS * NV; ++i) {
+        p[i] /= tot;
+    }
+    f->grid.pred_mass[l] = 1;
+    m->loglik = 0;
+    moments(f, m, l);
+}
+
+static void place_all(hstpf_t *f, real yr, real v0)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        place_one(f, &f->m[l], yr, v0);
+    }
+}
+
+/* ---- one step of one model --------------------------------------------- */
+
+/* Bins of a histogram on [x0, x1] at spacing at least h0, so that at most
+ * nmax bins and a noise of range r fits the kernel capacity. */
+static real bin_width(real x0, real x1, real h0, real r, int nmax)
+{
+    real h = h0;
+    const real hb = (x1 - x0) / (real)(nmax - 2), hk = r / (real)(HSTPF__GRID_K - 4);
+    h = hb > h ? hb : h;
+    return hk > h ? hk : h;
+}
+
+/* The GRID_TAIL quantiles of a histogram (bins of width h from x0, n bins)
+ * convolved with the noise scale * X: the support of a predicted marginal. */
+static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real tot,
+                            real *k, real *lo, real *hi)
+{
+    const real cut = GRID_TAIL * tot;
+    int m0, nk, b, kk;
+    real c = 0;
+    nk = kernel(d, scale, h, k, &m0);
+    /* output bin b (0 .. n + nk - 2) holds sum_kk k[kk] hist[b - kk] and
+     * covers x0 + (b + m0) h .. + h */
+    for (b = 0; b < n + nk - 1; ++b) {
+        real o = 0;
+        for (kk = 0; kk < nk; ++kk) {
+            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        }
+        c += o;
+        if (c > cut) {
+            break;
+        }
+    }
+    *lo = x0 + (real)(b + m0) * h;
+    c = 0;
+    for (b = n + nk - 2; b >= 0; --b) {
+        real o = 0;
+        for (kk = 0; kk < nk; ++kk) {
+            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        }
+        c += o;
+        if (c > cut) {
+            break;
+        }
+    }
+    *hi = x0 + (real)(b + m0 + 1) * h;
+    if (*hi <= *lo) {
+        *hi = *lo + h;
+    }
+}
+
+/* The box of the predicted density: the GRID_TAIL quantiles of its two
+ * marginals, from the occupied cells (f->grid.first/last, vimg) moved by the
+ * dynamics and convolved with the noise. On entry *s_lo.. hold the bounding
+ * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
+ * +- k sd: a one-sided noise's spike stays inside. */
+static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, real *s_lo, real *s_hi, real *v_lo,
+                          real *v_hi)
+{
+    const real *p = f->grid.p[l], *g = f->grid.geom[l];
+    const int nmax = NS * NV / 2;
+    real *hist = f->grid.work;
+    const real rs = scale * (tail_quantile(&f->ds, 1) - tail_quantile(&f->ds, 0));
+    const real rv = scale * (tail_quantile(&f->dv, 1) - tail_quantile(&f->dv, 0));
+    real h, x0;
+    int n, j, b;
+    /* positions: each occupied row shifted by T times its centre speed */
+    x0 = *s_lo;
+    h = bin_width(*s_lo, *s_hi, g[1], rs, nmax);
+    n = (int)((*s_hi - *s_lo) / h) + 2;
+    n = n < nmax ? n : nmax;
+    memset(hist, 0, (size_t)n * sizeof *hist);
+    for (j = 0; j < NV; ++j) {
+        const real sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
+        if (f->grid.first[j] <= f->grid.last[j]) {
+            remap(p + j * NS, f->grid.first[j], f->grid.last[j], (g[0] + sh - x0) / h, g[1] / h, hist, n);
+        }
+    }
+    noisy_quantiles(hist, n, x0, h, &f->ds, scale, tot, f->grid.ks, s_lo, s_hi);
+    /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
+    x0 = *v_lo;
+    h = bin_width(*v_lo, *v_hi, g[3], rv, nmax);
+    n = (int)((*v_hi - *v_lo) / h) + 2;
+    n = n < nmax ? n : nmax;
+    memset(hist, 0, (size_t)n * sizeof *hist);
+    for (j = 0; j < NV; ++j) {
+        real ta, tb, rm = 0;
+        int i;
+        if (f->grid.first[j] > f->grid.last[j]) {
+            continue;
+        }
+        for (i = f->grid.first[j]; i <= f->grid.last[j]; ++i) {
+            rm += p[j * NS + i];
+        }
+        ta = (f->grid.vimg[j] - x0) / h;
+        tb = (f->grid.vimg[j + 1] - x0) / h;
+        if (ta > tb) {
+            const real t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (tb - ta < (real)1e-6) {
+            b = ta > (real)0 ? (int32_t)ta : 0;
+            hist[b < n ? b : n - 1] += rm;
+            continue;
+        }
+        remap(&rm, 0, 0, ta, tb - ta, hist, n);
+    }
+    noisy_quantiles(hist, n, x0, h, &f->dv, scale, tot, f->grid.kv, v_lo, v_hi);
+}
+
+/* Steps 1-2: the new box from the transported support plus the noise
+ * quantiles, and the cells transported into f->grid.work. A cell is
+ * occupied when it holds more than GRID_TAIL / cells of the mass, so that
+ * at most GRID_TAIL is left behind; the box is the bounding box of the
+ * occupied cells after the dynamics (each row moved by T times its centre
+ * speed), so a correlated posterior does not inflate it. */
+static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, real *ng)
+{
+    const real *p = f->grid.p[l], *g = geom(f, l);
+    real *w = f->grid.work, *vimg = f->grid.vimg;
+    int16_t *first = f->grid.first, *last = f->grid.last, *box = f->grid.box;
+    real tot = 0, thr, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38, v_hi = (real)-3e38;
+    int i, j, any = 0;
+    for (i = 0; i < NS * NV; ++i) {
+        tot += p[i];
+    }
+    thr = GRID_TAIL * tot / (real)(NS * NV);
+    for (j = 0; j < NV; ++j) {
+        const real *r = p + j * NS, sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
+        int a = 0, b = NS - 1;
+        while (a <= b && r[a] <= thr) {
+            ++a;
+        }
+        while (b >= a && r[b] <= thr) {
+            --b;
+        }
+        first[j] = (int16_t)a;
+        last[j] = (int16_t)b;
+        if (a > b) {
+            continue;
+        }
+        any = 1;
+        vimg[j] = speed_map(m, g[2] + (real)j * g[3], dt, acc);
+        vimg[j + 1] = speed_map(m, g[2] + (real)(j + 1) * g[3], dt, acc);
+        s_lo = g[0] + (real)a * g[1] + sh < s_lo ? g[0] + (real)a * g[1] + sh : s_lo;
+        s_hi = g[0] + (real)(b + 1) * g[1] + sh > s_hi ? g[0] + (real)(b + 1) * g[1] + sh : s_hi;
+        for (i = j; i <= j + 1; ++i) {
+            v_lo = vimg[i] < v_lo ? vimg[i] : v_lo;
+            v_hi = vimg[i] > v_hi ? vimg[i] : v_hi;
+        }
+    }
+    if (!any) { /* cannot happen (normalised mass); keep the old box */
+        s_lo = g[0];
+        s_hi = g[0] + (real)NS * g[1];
+        v_lo = g[2];
+        v_hi = g[2] + (real)NV * g[3];
+    }
+    if (any) {
+        predicted_box(f, l, dt, scale, tot, &s_lo, &s_hi, &v_lo, &v_hi);
+    }
+    if (s_hi - s_lo < DS_MIN * (real)NS) {
+        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
+        s_hi = s_lo + DS_MIN * (real)NS;
+    }
+    if (v_hi - v_lo < DV_MIN * (real)NV) {
+        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
+        v_hi = v_lo + DV_MIN * (real)NV;
+    }
+    ng[0] = s_lo;
+    ng[1] = (s_hi - s_lo) / (real)NS;
+    ng[2] = v_lo;
+    ng[3] = (v_hi - v_lo) / (real)NV;
+    memset(w, 0, sizeof f->grid.work);
+    box[0] = NV; /* rows, then columns, of work that receive mass */
+    box[1] = -1;
+    box[2] = NS;
+    box[3] = -1;
+    for (j = 0; j < NV; ++j) {
+        real *row = f->grid.row;
+        real ta, tb;
+        const real a = (g[0] + dt * (g[2] + ((real)j + (real)0.5) * g[3]) - ng[0]) / ng[1];
+        int k, c0, c1;
+        if (first[j] > last[j]) {
+            continue;
+        }
+        ta = (vimg[j] - ng[2]) / ng[3];
+        tb = (vimg[j + 1] - ng[2]) / ng[3];
+        /* columns this row reaches */
+        c0 = (int)(a + (real)first[j] * g[1] / ng[1]);
+        c1 = (int)(a + (real)(last[j] + 1) * g[1] / ng[1]);
+        c0 = c0 < 0 ? 0 : (c0 > NS - 1 ? NS - 1 : c0);
+        c1 = c1 < 0 ? 0 : (c1 > NS - 1 ? NS - 1 : c1);
+        for (i = c0; i <= c1; ++i) {
+            row[i] = 0;
+        }
+        remap(p + j * NS, first[j], last[j], a, g[1] / ng[1], row, NS);
+        box[2] = (int16_t)(c0 < box[2] ? c0 : box[2]);
+        box[3] = (int16_t)(c1 > box[3] ? c1 : box[3]);
+        if (ta > tb) {
+            const real t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (tb - ta < (real)1e-6) { /* the whole row maps to one speed */
+            ta = tb = ta < (real)0 ? (real)0 : (ta > (real)(NV - 1) ? (real)(NV - 1) : ta);
+        }
+        for (k = ta > (real)0 ? (int32_t)ta : 0; k < NV && (k == (int32_t)ta || (real)k < tb); ++k) {
+            const real lo = ta > (real)k ? ta : (real)k, hi = tb < (real)(k + 1) ? tb : (real)(k + 1);
+            const real frac = tb > ta ? (hi - lo) / (tb - ta) : (real)1;
+            real *o = w + k * NS;
+            if (frac > (real)0) {
+                for (i = c0; i <= c1; ++i) {
+                    o[i] += frac * row[i];
+                }
+                box[0] = (int16_t)(k < box[0] ? k : box[0]);
+                box[1] = (int16_t)(k > box[1] ? k : box[1]);
+            }
+        }
+    }
+}
+
+/* Step 3: speed noise from work into p, then position noise in place; only
+ * the rows and columns that can receive mass are visited. */
+static void diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
+{
+    real *p = f->grid.p[l], *w = f->grid.work, *row = f->grid.row, *kv = f->grid.kv, *ks = f->grid.ks;
+    int16_t *box = f->grid.box;
+    int m0v, m0s, nkv, nks, j, k, i, r0, r1, c0, c1;
+    nkv = kernel(&f->dv, scale, ng[3], kv, &m0v);
+    nks = kernel(&f->ds, scale, ng[1], ks, &m0s);
+    memset(p, 0, sizeof f->grid.p[l]);
+    if (box[1] < box[0]) {
+        return;
+    }
+    r0 = box[0] + m0v;
+    r1 = box[1] + m0v + nkv - 1;
+    r0 = r0 < 0 ? 0 : r0;
+    r1 = r1 > NV - 1 ? NV - 1 : r1;
+    c0 = box[2];
+    c1 = box[3];
+    for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
+        real *o = p + j * NS;
+        for (k = 0; k < nkv; ++k) {
+            const int src = j - m0v - k;
+            const real c = kv[k];
+            const real *r;
+            if (src < box[0] || src > box[1] || c <= (real)0) {
+                continue;
+            }
+            r = w + src * NS;
+            for (i = c0; i <= c1; ++i) {
+                o[i] += c * r[i];
+            }
+        }
+    }
+    if (nks == 1 && m0s == 0) {
+        return;
+    }
+    {
+        const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
+        for (j = r0; j <= r1; ++j) {
+            real *o = p + j * NS;
+            for (i = c0; i <= c1; ++i) {
+                row[i] = o[i];
+                o[i] = 0;
+            }
+            for (i = o0; i <= o1; ++i) { /* gather: cell i from i - m0s - k */
+                const int ka = i - m0s - c1 > 0 ? i - m0s - c1 : 0;
+                const int kb = i - m0s - c0 < nks - 1 ? i - m0s - c0 : nks - 1;
+                const real *src = row + (i - m0s);
+                real acc = 0;
+                for (k = ka; k <= kb; ++k) {
+                    acc += ks[k] * src[-k];
+                }
+                o[i] = acc;
+            }
+        }
+    }
+}
+
+/* Step 4: the measurement update; returns the log-likelihood increment. */
+static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
+{
+    const hstpf_dist_t *de = &f->de;
+    real *p = f->grid.p[l], *g = geom(f, l), *ll = f->grid.row;
+    real lmax = (real)-3e38, sum = 0, inv;
+    int i, j, all_floor = 1;
+    (void)marginals(f, p);
+    for (i = 0; i < NS; ++i) {
+        const real x0 = g[0] + (real)i * g[1];
+        const real cell = dens_int(de, yr - (x0 + g[1]), yr - x0) / g[1];
+        const real fl = hstpf__dist_logpdf(de, yr - (x0 + (real)0.5 * g[1]));
+        real li = (fl < de->floor ? fl : de->floor);
+        if (cell > (real)0) {
+            const real lc = de->lp_max + hstpf__log_pos(cell);
+            li = lc > li ? lc : li;
+        }
+        ll[i] = li;
+        if (f->grid.ms[i] > MASS_MIN) {
+            lmax = li > lmax ? li : lmax;
+            all_floor = all_floor && li <= de->floor;
+        }
+    }
+    if (all_floor) {
+        ++m->floor_hits;
+        ++m->floor_run;
+    } else {
+        m->floor_run = 0;
+    }
+    for (i = 0; i < NS; ++i) {
+        ll[i] = hstpf__exp_neg(ll[i] - lmax);
+    }
+    for (j = 0; j < NV; ++j) {
+        real *r = p + j * NS;
+        for (i = 0; i < NS; ++i) {
+            r[i] *= ll[i];
+            sum += r[i];
+        }
+    }
+    if (!(sum > (real)0)) { /* every cell underflowed: keep the prediction */
+        return lmax;
+    }
+    inv = (real)1 / sum;
+    for (i = 0; i < NS * NV; ++i) {
+        p[i] *= inv;
+    }
+    return lmax + (real)log((double)sum);
+}
+
+static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
+{
+    const uint16_t l = (uint16_t)(m - f->m);
+    const real dt = (real)st->dt, scale = (real)st->scale;
+    real acc = (real)st->xu, ng[4], tot = 0;
+    real *p = f->grid.p[l], *g = geom(f, l);
+    int i;
+    if (f->cfg.n_track > 0u) {
+        acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
+    }
+    transport(f, m, l, dt, acc, scale, ng);
+    diffuse(f, l, scale, ng);
+    g[0] = ng[0];
+    g[1] = ng[1];
+    g[2] = ng[2];
+    g[3] = ng[3];
+    for (i = 0; i < NS * NV; ++i) {
+        tot += p[i];
+    }
+    f->grid.pred_mass[l] = tot;
+    m->loglik = 0;
+    if (st->has_y) {
+        m->loglik = measure(f, m, l, (real)st->yr);
+    } else if (tot > (real)0) {
+        const real inv = (real)1 / tot;
+        for (i = 0; i < NS * NV; ++i) {
+            p[i] *= inv;
+        }
+    }
+    moments(f, m, l);
+}
+
+static void predict_update(hstpf_t *f, const hstpf__step_t *st)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        model_step(f, &f->m[l], st);
+    }
+}
+
+static void shift(hstpf_t *f, real d)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        f->grid.geom[l][0] -= d;
+        f->m[l].s_mean -= d;
+    }
+}
+
+const hstpf__engine_t hstpf__engine_grid = {place_all, place_one, predict_update, NULL, shift};
