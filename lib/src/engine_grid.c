@@ -2,9 +2,11 @@
  * Simandl, Kralovec & Soderstrom). The density of (s, v) lives on
  * HSTPF_GRID_NS x HSTPF_GRID_NV uniform cells that are placed again every
  * step around the predicted support. One step:
- *   1. the support of the posterior (its marginal quantiles at GRID_TAIL)
- *      is carried through the dynamics and widened by the process-noise
- *      quantiles: the new grid, asymmetric where the noise is;
+ *   1. the new grid is the box between the GRID_TAIL quantiles of the
+ *      predicted marginals (the posterior's cells moved by the dynamics,
+ *      convolved with the noise): asymmetric where the noise is; a step
+ *      whose every cell misses the measurement is done again with
+ *      WIDE_TAIL, so a truncated tail is told apart from a misfit;
  *   2. every cell is transported by the dynamics (positions by T v, speeds
  *      through v + T a(v) with the no-reversal clamp) and its mass is
  *      shared among the new cells it overlaps (conservative remap);
@@ -28,7 +30,9 @@ typedef hstpf_real_t real;
 #define NS HSTPF_GRID_NS
 #define NV HSTPF_GRID_NV
 #define QN ((int)HSTPF_DIST_QN)
-#define GRID_TAIL ((real)1e-7)  /* mass left out on each side of a box */
+#define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
+#define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
+#define KERN_TAIL ((real)1e-7)  /* extent of the noise kernels and the prior */
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
 #define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
@@ -101,11 +105,11 @@ static real prob_in(const hstpf_dist_t *d, real a, real b)
     return p > (real)0 ? p : (real)0;
 }
 
-/* Quantile at probability GRID_TAIL (upper = 0) or 1 - GRID_TAIL: the
+/* Quantile at probability KERN_TAIL (upper = 0) or 1 - KERN_TAIL: the
  * sampler's own inverse CDF at that point. */
 static real tail_quantile(const hstpf_dist_t *d, int upper)
 {
-    const uint32_t r = (uint32_t)(GRID_TAIL * (real)4294967296.0);
+    const uint32_t r = (uint32_t)(KERN_TAIL * (real)4294967296.0);
     return hstpf__dist_sample(d, upper ? ~r : r);
 }
 
@@ -208,7 +212,7 @@ static void remap(const real *in, int i0, int i1, real a, real w, real *out, int
 
 /* Kernel of the noise scale * X on cells of width h: k[m - m0] = P(noise in
  * cell m), m in [m0, m0 + n). Normalised to 1 (the mass beyond the
- * GRID_TAIL quantiles is given back). Returns n >= 1; *m0 its first offset. */
+ * KERN_TAIL quantiles is given back). Returns n >= 1; *m0 its first offset. */
 static int kernel(const hstpf_dist_t *d, real scale, real h, real *k, int *m0)
 {
     const real lo = scale * tail_quantile(d, 0) / h, hi = scale * tail_quantile(d, 1) / h;
@@ -359,12 +363,11 @@ static real bin_width(real x0, real x1, real h0, real r, int nmax)
     return hk > h ? hk : h;
 }
 
-/* The GRID_TAIL quantiles of a histogram (bins of width h from x0, n bins)
+/* The f->grid.tail quantiles of a histogram (bins of width h from x0, n bins)
  * convolved with the noise scale * X: the support of a predicted marginal. */
-static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real tot,
+static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut,
                             real *k, real *lo, real *hi)
 {
-    const real cut = GRID_TAIL * tot;
     int m0, nk, b, kk;
     real c = 0;
     nk = kernel(d, scale, h, k, &m0);
@@ -398,7 +401,7 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
     }
 }
 
-/* The box of the predicted density: the GRID_TAIL quantiles of its two
+/* The box of the predicted density: the f->grid.tail quantiles of its two
  * marginals, from the occupied cells (f->grid.first/last, vimg) moved by the
  * dynamics and convolved with the noise. On entry *s_lo.. hold the bounding
  * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
@@ -425,7 +428,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
             remap(p + j * NS, f->grid.first[j], f->grid.last[j], (g[0] + sh - x0) / h, g[1] / h, hist, n);
         }
     }
-    noisy_quantiles(hist, n, x0, h, &f->ds, scale, tot, f->grid.ks, s_lo, s_hi);
+    noisy_quantiles(hist, n, x0, h, &f->ds, scale, f->grid.tail * tot, f->grid.ks, s_lo, s_hi);
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
     x0 = *v_lo;
     h = bin_width(*v_lo, *v_hi, g[3], rv, nmax);
@@ -455,13 +458,13 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         }
         remap(&rm, 0, 0, ta, tb - ta, hist, n);
     }
-    noisy_quantiles(hist, n, x0, h, &f->dv, scale, tot, f->grid.kv, v_lo, v_hi);
+    noisy_quantiles(hist, n, x0, h, &f->dv, scale, f->grid.tail * tot, f->grid.kv, v_lo, v_hi);
 }
 
 /* Steps 1-2: the new box from the transported support plus the noise
  * quantiles, and the cells transported into f->grid.work. A cell is
- * occupied when it holds more than GRID_TAIL / cells of the mass, so that
- * at most GRID_TAIL is left behind; the box is the bounding box of the
+ * occupied when it holds more than KERN_TAIL / cells of the mass, so that
+ * at most KERN_TAIL is left behind; the box is the bounding box of the
  * occupied cells after the dynamics (each row moved by T times its centre
  * speed), so a correlated posterior does not inflate it. */
 static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, real *ng)
@@ -474,7 +477,7 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
     for (i = 0; i < NS * NV; ++i) {
         tot += p[i];
     }
-    thr = GRID_TAIL * tot / (real)(NS * NV);
+    thr = KERN_TAIL * tot / (real)(NS * NV);
     for (j = 0; j < NV; ++j) {
         const real *r = p + j * NS, sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
         int a = 0, b = NS - 1;
@@ -677,16 +680,14 @@ static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
     return lmax + (real)log((double)sum);
 }
 
-static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
+/* Predict (and measure) one model with the box tail f->grid.tail. */
+static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
 {
     const uint16_t l = (uint16_t)(m - f->m);
     const real dt = (real)st->dt, scale = (real)st->scale;
-    real acc = (real)st->xu, ng[4], tot = 0;
+    real ng[4], tot = 0;
     real *p = f->grid.p[l], *g = geom(f, l);
     int i;
-    if (f->cfg.n_track > 0u) {
-        acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
-    }
     transport(f, m, l, dt, acc, scale, ng);
     diffuse(f, l, scale, ng);
     g[0] = ng[0];
@@ -706,14 +707,54 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
             p[i] *= inv;
         }
     }
+}
+
+/* One model's step. A model that was tracking and now misses the
+ * measurement with every cell may only have cut off the tail the truth
+ * was in (the box leaves GRID_TAIL out): the step is done again from the
+ * saved cells with a box that leaves out WIDE_TAIL. A model that still
+ * misses is a misfit (its dynamics cannot reach the measurement). */
+static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
+{
+    const uint16_t l = (uint16_t)(m - f->m);
+    const uint16_t run = m->floor_run;
+    const uint32_t hits = m->floor_hits;
+    const int retry = st->has_y && run == 0u;
+    real acc = (real)st->xu;
+    if (f->cfg.n_track > 0u) {
+        acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
+    }
+    if (retry) {
+        memcpy(f->grid.save, f->grid.p[l], sizeof f->grid.p[l]);
+        memcpy(f->grid.save + NS * NV, f->grid.geom[l], sizeof f->grid.geom[l]);
+    }
+    f->grid.tail = GRID_TAIL;
+    model_pass(f, m, st, acc);
+    if (retry && m->floor_run > 0u) {
+        memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
+        memcpy(f->grid.geom[l], f->grid.save + NS * NV, sizeof f->grid.geom[l]);
+        m->floor_run = run;
+        m->floor_hits = hits;
+        f->grid.tail = WIDE_TAIL;
+        model_pass(f, m, st, acc);
+    }
     moments(f, m, l);
 }
 
+/* When every model misses the measurement, it is the measurement (or the
+ * reference) that is off, not the models: no model's weight moves. */
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 {
-    uint16_t l;
+    uint16_t l, missed = 0;
     for (l = 0; l < f->cfg.n_models; ++l) {
+        const uint32_t hits = f->m[l].floor_hits;
         model_step(f, &f->m[l], st);
+        missed = (uint16_t)(missed + (f->m[l].floor_hits != hits));
+    }
+    if (st->has_y && missed == f->cfg.n_models) {
+        for (l = 0; l < f->cfg.n_models; ++l) {
+            f->m[l].loglik = 0;
+        }
     }
 }
 

@@ -324,6 +324,8 @@ typedef struct {
     hstpf_real_t geom[HSTPF_MAX_MODELS][4];              /* s0, ds, v0, dv: first edges, widths */
     hstpf_real_t pred_mass[HSTPF_MAX_MODELS];            /* mass kept by the last prediction */
     hstpf_real_t work[HSTPF__GRID_CELLS];                /* the transported grid */
+    hstpf_real_t save[HSTPF__GRID_CELLS + 4];            /* a model's cells before the step */
+    hstpf_real_t tail;                                   /* mass a box leaves out per side */
     hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
     hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
     hstpf_real_t vimg[HSTPF_GRID_NV + 1];                /* speed-cell edges after the dynamics */
