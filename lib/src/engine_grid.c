@@ -32,6 +32,7 @@ typedef hstpf_real_t real;
 #define QN ((int)HSTPF_DIST_QN)
 #define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
 #define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
+#define PULL_SD 2.0            /* measurement beyond this many sd: keep that tail */
 #define KERN_TAIL ((real)1e-7)  /* extent of the noise kernels and the prior */
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
@@ -363,10 +364,10 @@ static real bin_width(real x0, real x1, real h0, real r, int nmax)
     return hk > h ? hk : h;
 }
 
-/* The f->grid.tail quantiles of a histogram (bins of width h from x0, n bins)
+/* The cut_lo and 1 - cut_hi quantiles of a histogram (bins of width h from x0, n bins)
  * convolved with the noise scale * X: the support of a predicted marginal. */
-static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut,
-                            real *k, real *lo, real *hi)
+static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
+                            real cut_hi, real *k, real *lo, real *hi)
 {
     int m0, nk, b, kk;
     real c = 0;
@@ -379,7 +380,7 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
             o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
         }
         c += o;
-        if (c > cut) {
+        if (c > cut_lo) {
             break;
         }
     }
@@ -391,7 +392,7 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
             o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
         }
         c += o;
-        if (c > cut) {
+        if (c > cut_hi) {
             break;
         }
     }
@@ -406,8 +407,8 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
  * dynamics and convolved with the noise. On entry *s_lo.. hold the bounding
  * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
  * +- k sd: a one-sided noise's spike stays inside. */
-static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, real *s_lo, real *s_hi, real *v_lo,
-                          real *v_hi)
+static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, int has_y, real mid, real *s_lo,
+                          real *s_hi, real *v_lo, real *v_hi)
 {
     const real *p = f->grid.p[l], *g = f->grid.geom[l];
     const int nmax = NS * NV / 2;
@@ -415,7 +416,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     const real rs = scale * (tail_quantile(&f->ds, 1) - tail_quantile(&f->ds, 0));
     const real rv = scale * (tail_quantile(&f->dv, 1) - tail_quantile(&f->dv, 0));
     real h, x0;
-    int n, j, b;
+    int n, j, b, pull = 0;
     /* positions: each occupied row shifted by T times its centre speed */
     x0 = *s_lo;
     h = bin_width(*s_lo, *s_hi, g[1], rs, nmax);
@@ -428,7 +429,31 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
             remap(p + j * NS, f->grid.first[j], f->grid.last[j], (g[0] + sh - x0) / h, g[1] / h, hist, n);
         }
     }
-    noisy_quantiles(hist, n, x0, h, &f->ds, scale, f->grid.tail * tot, f->grid.ks, s_lo, s_hi);
+    {
+        /* the side the measurement lies on keeps its tail to WIDE_TAIL: a
+         * model the measurements pull away from its prediction has its
+         * posterior there (cutting it would bias every misfit model) */
+        real cut_lo = f->grid.tail * tot, cut_hi = cut_lo;
+        if (has_y) {
+            double m1 = 0.0, m2 = 0.0, sd;
+            for (b = 0; b < n; ++b) {
+                const double x = (double)x0 + ((double)b + 0.5) * (double)h;
+                m1 += (double)hist[b] * x;
+                m2 += (double)hist[b] * x * x;
+            }
+            m1 /= (double)tot;
+            sd = sqrt(fmax(m2 / (double)tot - m1 * m1, 0.0) + (double)(scale * f->ds.sd) * (double)(scale * f->ds.sd));
+            m1 += (double)(scale * f->ds.mean);
+            if ((double)mid > m1 + PULL_SD * sd) {
+                cut_hi = WIDE_TAIL * tot;
+                pull = 1;
+            } else if ((double)mid < m1 - PULL_SD * sd) {
+                cut_lo = WIDE_TAIL * tot;
+                pull = -1;
+            }
+        }
+        noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, s_lo, s_hi);
+    }
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
     x0 = *v_lo;
     h = bin_width(*v_lo, *v_hi, g[3], rv, nmax);
@@ -458,7 +483,9 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         }
         remap(&rm, 0, 0, ta, tb - ta, hist, n);
     }
-    noisy_quantiles(hist, n, x0, h, &f->dv, scale, f->grid.tail * tot, f->grid.kv, v_lo, v_hi);
+    /* the pull moves the speed the same way (through the s-v correlation) */
+    noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
+                    (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, v_lo, v_hi);
 }
 
 /* Steps 1-2: the new box from the transported support plus the noise
@@ -467,12 +494,14 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
  * at most KERN_TAIL is left behind; the box is the bounding box of the
  * occupied cells after the dynamics (each row moved by T times its centre
  * speed), so a correlated posterior does not inflate it. */
-static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, real *ng)
+static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y, real yr,
+                      real *ng)
 {
     const real *p = f->grid.p[l], *g = geom(f, l);
     real *w = f->grid.work, *vimg = f->grid.vimg;
     int16_t *first = f->grid.first, *last = f->grid.last, *box = f->grid.box;
     real tot = 0, thr, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38, v_hi = (real)-3e38;
+    const real mid = yr - hstpf__dist_sample(&f->de, 0x80000000u); /* y less e's median */
     int i, j, any = 0;
     for (i = 0; i < NS * NV; ++i) {
         tot += p[i];
@@ -509,7 +538,17 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
         v_hi = g[2] + (real)NV * g[3];
     }
     if (any) {
-        predicted_box(f, l, dt, scale, tot, &s_lo, &s_hi, &v_lo, &v_hi);
+        predicted_box(f, l, dt, scale, tot, has_y, mid, &s_lo, &s_hi, &v_lo, &v_hi);
+    }
+    if (has_y) {
+        /* a measurement whose middle lies beyond the predicted box pulls
+         * the posterior out of it: the box reaches to the measurement's
+         * 1 %..99 % range, or the model could never catch up */
+        if (mid < s_lo || mid > s_hi) {
+            const real e_hi = hstpf__dist_sample(&f->de, 0xFD70A3D7u), e_lo = hstpf__dist_sample(&f->de, 0x028F5C29u);
+            s_lo = yr - e_hi < s_lo ? yr - e_hi : s_lo;
+            s_hi = yr - e_lo > s_hi ? yr - e_lo : s_hi;
+        }
     }
     if (s_hi - s_lo < DS_MIN * (real)NS) {
         s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
@@ -688,7 +727,7 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
     real ng[4], tot = 0;
     real *p = f->grid.p[l], *g = geom(f, l);
     int i;
-    transport(f, m, l, dt, acc, scale, ng);
+    transport(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng);
     diffuse(f, l, scale, ng);
     g[0] = ng[0];
     g[1] = ng[1];
