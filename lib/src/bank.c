@@ -22,7 +22,7 @@ static int fin(double x)
 hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg)
 {
     if (cfg->engine == HSTPF_ENGINE_AUTO) {
-        return hstpf__all_gaussian(cfg) ? HSTPF_ENGINE_KALMAN : HSTPF_ENGINE_PARTICLE;
+        return hstpf__all_gaussian(cfg) ? HSTPF_ENGINE_KALMAN : HSTPF_ENGINE_GRID;
     }
     return cfg->engine;
 }

@@ -218,7 +218,7 @@ static void test_init_errors(void **state)
     BAD(bc_.dt_nominal_s = 0.0, HSTPF_E_CONFIG);
     BAD(bc_.dt_nominal_s = -1.0, HSTPF_E_CONFIG);
     BAD(bc_.dt_nominal_s = HSTPF_DT_MAX_S + 0.1, HSTPF_E_CONFIG);
-    BAD(bc_.engine = (hstpf_engine_t)3, HSTPF_E_CONFIG);
+    BAD(bc_.engine = (hstpf_engine_t)4, HSTPF_E_CONFIG);
     BAD((bc_.engine = HSTPF_ENGINE_KALMAN, bc_.noise_v.kind = HSTPF_DIST_GAMMA, bc_.noise_v.shape = 0.1,
          bc_.noise_v.scale = 0.05), HSTPF_E_CONFIG);
     BAD(bc_.e_blur_sd = -0.1, HSTPF_E_CONFIG);

@@ -262,7 +262,8 @@ static void test_engine_choice(void **state)
     c.noise_e.shape = 0.5;
     c.noise_e.scale = 0.2;
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_OK); /* particles */
+    assert_int_equal(filt.engine, HSTPF_ENGINE_GRID); /* auto: the grid for non-Gaussian noise */
+    assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_E_CONFIG);
     c.engine = HSTPF_ENGINE_KALMAN;
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
     config(&c, HSTPF_ENGINE_KALMAN);
