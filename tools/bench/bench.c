@@ -12,7 +12,10 @@
  * time: a large gap means the run was preempted (a busy machine).
  *
  * Configurations MxN run the particle engine; MxK runs the Kalman engine
- * (one EKF per model), reported per model-step instead.
+ * (one EKF per model) and MxG the grid engine (HSTPF_GRID_NS x
+ * HSTPF_GRID_NV cells per model), both reported per model-step instead.
+ * The grid rows run on the same Gaussian inputs (its cost does not depend
+ * on the noise's kind, only on the kernels' width in cells).
  *
  * Models: 3 = the paper's Case 1 set {SS1/SS3/SS4, CRH3, SS8}; otherwise the
  * first M rows of Table 1 (17 = all of them). Not a test: ctest does not run
@@ -52,6 +55,7 @@
 typedef struct {
     unsigned models, particles;
     int kalman;               /* Kalman engine: figures are per model-step */
+    int grid;                 /* grid engine: the same */
     int skipped;              /* above the library's capacity */
     unsigned runs;
     double ns[MAX_RUNS];      /* ns per particle-step, per run (wall) */
@@ -89,7 +93,7 @@ static void usage(void)
 {
     fprintf(stderr,
             "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
-            "  MxN: M models, N particles; MxK: M models, Kalman engine\n"
+            "  MxN: M models, N particles; MxK: M models, Kalman engine; MxG: grid engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
             "           --config 3xK --config 17xK\n");
 }
@@ -139,7 +143,7 @@ static double run_once(const hstpf_config_t *cfg, const hstpf_input_t *in, unsig
         elapsed += t1 - t0;
         cpu += c1 - c0;
         ps += (unsigned long long)steps * cfg->n_models *
-              (cfg->engine == HSTPF_ENGINE_KALMAN ? 1u : cfg->n_particles);
+              (cfg->engine == HSTPF_ENGINE_PARTICLE ? cfg->n_particles : 1u);
         (void)hstpf_estimate(&filt, &est);
         r->declared = est.declared;
         if (ok != steps) {
@@ -177,10 +181,12 @@ int main(int argc, char **argv)
             unsigned m = 0, p = 0;
             const char *arg = argv[++i];
             char kc = 0;
-            if (sscanf(arg, "%ux%c", &m, &kc) == 2 && kc == 'K' && m >= 1u && m <= HSTPF_N_TRAIN_TYPES) {
+            if (sscanf(arg, "%ux%c", &m, &kc) == 2 && (kc == 'K' || kc == 'G') && m >= 1u &&
+                m <= HSTPF_N_TRAIN_TYPES) {
                 res[n_cfg].models = m;
                 res[n_cfg].particles = 2;
-                res[n_cfg].kalman = 1;
+                res[n_cfg].kalman = kc == 'K';
+                res[n_cfg].grid = kc == 'G';
                 ++n_cfg;
                 continue;
             }
@@ -212,7 +218,13 @@ int main(int argc, char **argv)
         res[3].models = 17;
         res[3].particles = 2;
         res[3].kalman = 1;
-        n_cfg = 4;
+        res[4].models = 3;
+        res[4].particles = 2;
+        res[4].grid = 1;
+        res[5].models = 17;
+        res[5].particles = 2;
+        res[5].grid = 1;
+        n_cfg = 6;
     }
 
     /* the inputs, simulated once: only hstpf_step() is timed */
@@ -247,7 +259,7 @@ int main(int argc, char **argv)
         cfg.n_models = (uint16_t)r->models;
         cfg.n_particles = (uint16_t)r->particles;
         cfg.seed = 2;
-        cfg.engine = r->kalman ? HSTPF_ENGINE_KALMAN : HSTPF_ENGINE_PARTICLE;
+        cfg.engine = r->kalman ? HSTPF_ENGINE_KALMAN : (r->grid ? HSTPF_ENGINE_GRID : HSTPF_ENGINE_PARTICLE);
         if (run_once(&cfg, in, steps, 0.0, r, &r->cpu[0]) < 0.0) { /* warm-up */
             return 1;
         }
@@ -277,14 +289,16 @@ int main(int argc, char **argv)
         printf("  \"target_ns_per_particle_step\": %g,\n  \"results\": [", TARGET_NS);
         for (i = 0; i < n_cfg; ++i) {
             const result_t *r = &res[i];
-            const double per = r->kalman ? 1.0 : (double)r->particles;
+            const int per_model = r->kalman || r->grid;
+            const double per = per_model ? 1.0 : (double)r->particles;
             printf("%s\n    {\"models\": %u, \"engine\": \"%s\", \"particles\": %u, ", i ? "," : "",
-                   r->models, r->kalman ? "kalman" : "particle", r->kalman ? 0u : r->particles);
+                   r->models, r->kalman ? "kalman" : (r->grid ? "grid" : "particle"),
+                   per_model ? 0u : r->particles);
             if (r->skipped) {
                 printf("\"skipped\": \"above the library's capacity\"}");
                 continue;
             }
-            /* Kalman rows: "particle" reads "model" (one EKF per model) */
+            /* Kalman and grid rows: "particle" reads "model" (one filter per model) */
             printf("\"ns_per_particle_step_median\": %.3f, \"ns_per_particle_step_min\": %.3f, ",
                    r->med, r->min);
             printf("\"steps_per_s_median\": %.1f, \"steps_per_s_max\": %.1f, ",
@@ -320,9 +334,9 @@ int main(int argc, char **argv)
             printf("%6u %9u   skipped: above this library's capacity\n", r->models, r->particles);
             continue;
         }
-        if (r->kalman) {
+        if (r->kalman || r->grid) {
             printf("%6u %9s %14.2f %14.2f %14.0f %15.0f %13.2f  (ns per model-step)\n", r->models,
-                   "Kalman", r->med, r->min, 1e9 / (r->med * r->models), 1e9 / (r->min * r->models),
+                   r->kalman ? "Kalman" : "grid", r->med, r->min, 1e9 / (r->med * r->models), 1e9 / (r->min * r->models),
                    r->cpu_med);
             continue;
         }
@@ -332,11 +346,23 @@ int main(int argc, char **argv)
     }
     printf("\ntarget: under %.0f ns per particle-step:", TARGET_NS);
     for (i = 0; i < n_cfg; ++i) {
-        if (!res[i].skipped && !res[i].kalman) {
+        if (!res[i].skipped && !res[i].kalman && !res[i].grid) {
             printf(" %ux%u %s", res[i].models, res[i].particles,
                    res[i].med < TARGET_NS ? "met" : "NOT met");
         }
     }
     printf(" (median)\n");
+    printf("bank step (median, us):");
+    for (i = 0; i < n_cfg; ++i) {
+        const result_t *r = &res[i];
+        if (!r->skipped) {
+            printf(" %ux%s %.1f", r->models, r->kalman ? "K" : (r->grid ? "G" : ""),
+                   r->med * r->models * (r->kalman || r->grid ? 1.0 : (double)r->particles) / 1e3);
+            if (!r->kalman && !r->grid) {
+                printf("(x%u)", r->particles);
+            }
+        }
+    }
+    printf("\n");
     return 0;
 }
