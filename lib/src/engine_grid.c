@@ -212,33 +212,35 @@ static void remap(const real *in, int i0, int i1, real a, real w, real *out, int
 }
 
 /* Kernel of the noise scale * X on cells of width h: k[m - m0] = P(noise in
- * cell m), m in [m0, m0 + n). Normalised to 1 (the mass beyond the
- * KERN_TAIL quantiles is given back). Returns n >= 1; *m0 its first offset. */
-static int kernel(const hstpf_dist_t *d, real scale, real h, real *k, int *m0)
+ * cell m) / P(noise within the KERN_TAIL quantiles), for the offsets m in
+ * [m0, m0 + n) that lie within +-reach cells (farther ones cannot land on
+ * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
+static int kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k, int *m0)
 {
     const real lo = scale * tail_quantile(d, 0) / h, hi = scale * tail_quantile(d, 1) / h;
-    const int cap = HSTPF__GRID_K;
+    const int cap = (HSTPF__GRID_K - 1) / 2;
     int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
-    real sum = 0;
-    if (b - a + 1 > cap) { /* cannot happen with the box margins; kept safe */
-        a = (a + b) / 2 - cap / 2;
-        b = a + cap - 1;
-    }
+    real sum = 0, total;
+    reach = reach < cap ? reach : cap;
+    total = scale > (real)0 ? prob_in(d, ((real)a - (real)0.5) * h / scale, ((real)b + (real)0.5) * h / scale)
+                            : (real)0;
+    a = a < -reach ? -reach : (a > reach ? reach : a);
+    b = b > reach ? reach : (b < -reach ? -reach : b);
     n = b - a + 1;
     for (m = 0; m < n; ++m) {
         const real c = (real)(a + m);
         k[m] = scale > (real)0 ? prob_in(d, (c - (real)0.5) * h / scale, (c + (real)0.5) * h / scale) : (real)0;
         sum += k[m];
     }
-    if (!(sum > (real)0)) { /* no spread at this scale: a point mass at offset 0 */
+    if (!(sum > (real)0) || !(total > (real)0)) { /* no spread at this scale: a point mass at offset 0 */
         const int z = a > 0 ? 0 : (b < 0 ? n - 1 : -a);
         for (m = 0; m < n; ++m) {
             k[m] = m == z ? (real)1 : (real)0;
         }
-        sum = 1;
+        total = 1;
     }
     for (m = 0; m < n; ++m) {
-        k[m] /= sum;
+        k[m] /= total;
     }
     *m0 = a;
     return n;
@@ -371,7 +373,7 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
 {
     int m0, nk, b, kk;
     real c = 0;
-    nk = kernel(d, scale, h, k, &m0);
+    nk = kernel(d, scale, h, HSTPF__GRID_K, k, &m0);
     /* output bin b (0 .. n + nk - 2) holds sum_kk k[kk] hist[b - kk] and
      * covers x0 + (b + m0) h .. + h */
     for (b = 0; b < n + nk - 1; ++b) {
@@ -402,16 +404,58 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
     }
 }
 
+/* With a measurement, the position box only needs to hold the posterior:
+ * the predicted position marginal (hist convolved with the noise) times the
+ * measurement density over each bin, cut at GRID_TAIL per side. Predicted
+ * mass left outside then carries at most 2 GRID_TAIL of the likelihood, so
+ * the increment changes by less than 3e-5 nats, while the cells shrink to
+ * the posterior's width (Case 2: centimetres inside a metre-wide
+ * prediction, whose width is the Gamma(0.02) noise's rare long jumps).
+ * Nothing changes when the measurement misses the prediction (the retry
+ * and the reach to the measurement handle that). */
+static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, real scale, real yr, real *s_lo,
+                          real *s_hi)
+{
+    real *out = f->grid.work + NS * NV / 2, *k = f->grid.ks;
+    const real lfloor = hstpf__exp_neg(f->de.floor - f->de.lp_max);
+    real sum = 0, cut, c;
+    int m0, nk, b, kk, nb, bl, bh;
+    nk = kernel(&f->ds, scale, h, HSTPF__GRID_K, k, &m0);
+    nb = n + nk - 1;
+    for (b = 0; b < nb; ++b) { /* bin b covers x0 + (b + m0) h .. + h */
+        const real x = x0 + (real)(b + m0) * h;
+        real o = 0, lik;
+        for (kk = 0; kk < nk; ++kk) {
+            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        }
+        lik = o > (real)0 ? dens_int(&f->de, yr - (x + h), yr - x) / h : (real)0;
+        out[b] = lik > lfloor ? o * lik : (real)0;
+        sum += out[b];
+    }
+    if (!(sum > (real)0)) {
+        return;
+    }
+    cut = GRID_TAIL * sum;
+    for (bl = 0, c = 0; bl < nb - 1 && c + out[bl] <= cut; ++bl) {
+        c += out[bl];
+    }
+    for (bh = nb - 1, c = 0; bh > bl && c + out[bh] <= cut; --bh) {
+        c += out[bh];
+    }
+    *s_lo = x0 + (real)(bl + m0) * h;
+    *s_hi = x0 + (real)(bh + m0 + 1) * h;
+}
+
 /* The box of the predicted density: the f->grid.tail quantiles of its two
  * marginals, from the occupied cells (f->grid.first/last, vimg) moved by the
  * dynamics and convolved with the noise. On entry *s_lo.. hold the bounding
  * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
  * +- k sd: a one-sided noise's spike stays inside. */
-static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, int has_y, real mid, real *s_lo,
-                          real *s_hi, real *v_lo, real *v_hi)
+static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, int has_y, real yr, real mid,
+                          real *s_lo, real *s_hi, real *v_lo, real *v_hi)
 {
     const real *p = f->grid.p[l], *g = f->grid.geom[l];
-    const int nmax = NS * NV / 2;
+    const int nmax = NS * NV / 4;
     real *hist = f->grid.work;
     const real rs = scale * (tail_quantile(&f->ds, 1) - tail_quantile(&f->ds, 0));
     const real rv = scale * (tail_quantile(&f->dv, 1) - tail_quantile(&f->dv, 0));
@@ -453,6 +497,9 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
             }
         }
         noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, s_lo, s_hi);
+        if (has_y && f->grid.tail > WIDE_TAIL) {
+            posterior_box(f, hist, n, x0, h, scale, yr, s_lo, s_hi);
+        }
     }
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
     x0 = *v_lo;
@@ -538,7 +585,7 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
         v_hi = g[2] + (real)NV * g[3];
     }
     if (any) {
-        predicted_box(f, l, dt, scale, tot, has_y, mid, &s_lo, &s_hi, &v_lo, &v_hi);
+        predicted_box(f, l, dt, scale, tot, has_y, yr, mid, &s_lo, &s_hi, &v_lo, &v_hi);
     }
     if (has_y) {
         /* a measurement whose middle lies beyond the predicted box pulls
@@ -618,8 +665,8 @@ static void diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
     real *p = f->grid.p[l], *w = f->grid.work, *row = f->grid.row, *kv = f->grid.kv, *ks = f->grid.ks;
     int16_t *box = f->grid.box;
     int m0v, m0s, nkv, nks, j, k, i, r0, r1, c0, c1;
-    nkv = kernel(&f->dv, scale, ng[3], kv, &m0v);
-    nks = kernel(&f->ds, scale, ng[1], ks, &m0s);
+    nkv = kernel(&f->dv, scale, ng[3], NV - 1, kv, &m0v);
+    nks = kernel(&f->ds, scale, ng[1], NS - 1, ks, &m0s);
     memset(p, 0, sizeof f->grid.p[l]);
     if (box[1] < box[0]) {
         return;
@@ -748,34 +795,54 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
     }
 }
 
+static real mass_of(const real *p)
+{
+    real t = 0;
+    int i;
+    for (i = 0; i < NS * NV; ++i) {
+        t += p[i];
+    }
+    return t;
+}
+
 /* One model's step. A model that was tracking and now misses the
  * measurement with every cell may only have cut off the tail the truth
- * was in (the box leaves GRID_TAIL out): the step is done again from the
- * saved cells with a box that leaves out WIDE_TAIL. A model that still
- * misses is a misfit (its dynamics cannot reach the measurement). */
+ * was in (the box leaves GRID_TAIL out, and with a measurement it holds
+ * only the posterior): the step is done again from the saved cells with
+ * the predicted box that leaves out WIDE_TAIL. A model that still misses
+ * is a misfit (its dynamics cannot reach the measurement). A grid left
+ * without mass (cannot happen but by round-off) is placed again at the
+ * measurement with the model's speed, and scores the floor. */
 static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
 {
     const uint16_t l = (uint16_t)(m - f->m);
     const uint16_t run = m->floor_run;
     const uint32_t hits = m->floor_hits;
-    const int retry = st->has_y && run == 0u;
+    const real v_was = m->v_mean;
     real acc = (real)st->xu;
     if (f->cfg.n_track > 0u) {
         acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
     }
-    if (retry) {
+    if (st->has_y) {
         memcpy(f->grid.save, f->grid.p[l], sizeof f->grid.p[l]);
         memcpy(f->grid.save + NS * NV, f->grid.geom[l], sizeof f->grid.geom[l]);
     }
     f->grid.tail = GRID_TAIL;
     model_pass(f, m, st, acc);
-    if (retry && m->floor_run > 0u) {
+    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !(mass_of(f->grid.p[l]) > (real)0))) {
         memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
         memcpy(f->grid.geom[l], f->grid.save + NS * NV, sizeof f->grid.geom[l]);
         m->floor_run = run;
         m->floor_hits = hits;
         f->grid.tail = WIDE_TAIL;
         model_pass(f, m, st, acc);
+    }
+    if (!(mass_of(f->grid.p[l]) > (real)0)) {
+        place_one(f, m, st->has_y ? (real)st->yr : m->s_mean, v_was);
+        m->loglik = st->has_y ? f->de.floor : (real)0;
+        m->floor_hits = hits + (st->has_y ? 1u : 0u);
+        m->floor_run = (uint16_t)(run + (st->has_y ? 1u : 0u));
+        return;
     }
     moments(f, m, l);
 }
