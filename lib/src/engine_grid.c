@@ -160,6 +160,23 @@ static real dens_int(const hstpf_dist_t *d, real a, real b)
     return sum;
 }
 
+/* Log of the mean density of d over [a, b], a < b (absolute, nats). Where
+ * the interval holds a fair share of the probability it is taken from the
+ * CDF (the quantile tables: exact at their nodes, which resolve a Gamma's
+ * unbounded peak, where the log-density table's first interval holds only
+ * an average); in the tails from the log-density table, whose relative
+ * accuracy holds where a CDF difference would cancel. -3e38 for zero. */
+static real cell_loglik(const hstpf_dist_t *d, real a, real b)
+{
+    const real pm = prob_in(d, a, b);
+    real dens;
+    if (pm > (real)1e-5) {
+        return hstpf__log_pos(pm / (b - a));
+    }
+    dens = dens_int(d, a, b) / (b - a);
+    return dens > (real)0 ? d->lp_max + hstpf__log_pos(dens) : (real)-3e38;
+}
+
 /* ---- grid pieces ------------------------------------------------------ */
 
 static real *geom(hstpf_t *f, uint16_t l)
@@ -428,7 +445,8 @@ static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, 
         for (kk = 0; kk < nk; ++kk) {
             o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
         }
-        lik = o > (real)0 ? dens_int(&f->de, yr - (x + h), yr - x) / h : (real)0;
+        lik = o > (real)0 ? cell_loglik(&f->de, yr - (x + h), yr - x) - f->de.lp_max : (real)-3e38;
+        lik = lik > (real)-80 ? hstpf__exp_neg(lik < (real)0 ? lik : (real)0) : (real)0;
         out[b] = lik > lfloor ? o * lik : (real)0;
         sum += out[b];
     }
@@ -727,13 +745,10 @@ static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
     (void)marginals(f, p);
     for (i = 0; i < NS; ++i) {
         const real x0 = g[0] + (real)i * g[1];
-        const real cell = dens_int(de, yr - (x0 + g[1]), yr - x0) / g[1];
+        const real lc = cell_loglik(de, yr - (x0 + g[1]), yr - x0);
         const real fl = hstpf__dist_logpdf(de, yr - (x0 + (real)0.5 * g[1]));
         real li = (fl < de->floor ? fl : de->floor);
-        if (cell > (real)0) {
-            const real lc = de->lp_max + hstpf__log_pos(cell);
-            li = lc > li ? lc : li;
-        }
+        li = lc > li ? lc : li;
         ll[i] = li;
         if (f->grid.ms[i] > MASS_MIN) {
             lmax = li > lmax ? li : lmax;
