@@ -5,11 +5,12 @@
  * weights (Xie et al., "An Online State and Parameter Estimation of Dynamic
  * State Space Model of High Speed Train"). Each model's filter is one of the
  * engines of hstpf_engine_t: an extended Kalman filter (exact likelihood for
- * Gaussian noise) or a particle filter (any noise). See docs/model.md.
+ * Gaussian noise), a deterministic grid filter (any noise, no Monte Carlo
+ * noise; docs/grid.md) or a particle filter (any noise). See docs/model.md.
  *
  * Sources (lib/src): bank.c (life cycle, step, model weights, declaration,
  * blend), engine.h (the interface every engine implements),
- * engine_kalman.c, engine_particle.c, config.c (defaults and the one table
+ * engine_kalman.c, engine_grid.c, engine_particle.c, config.c (defaults and the one table
  * of ranges), track.c (gradient and curve profile), dist.c, rng.c.
  *
  * Model, per step of length T seconds (units: docs/model.md):
@@ -353,7 +354,9 @@ typedef struct {
 /**
  * The instance. Caller-owned; all members are private and may change
  * between versions. sizeof(hstpf_t) is O(HSTPF_MAX_MODELS x
- * HSTPF_MAX_PARTICLES x 3 x sizeof(hstpf_real_t)) plus the noise tables;
+ * HSTPF_MAX_PARTICLES x 3 x sizeof(hstpf_real_t)) plus the noise tables
+ * plus the grid engine's cells, (HSTPF_MAX_MODELS + 2) x HSTPF_GRID_NS x
+ * HSTPF_GRID_NV x sizeof(hstpf_real_t);
  * docs/footprint.md lists measured sizes.
  */
 typedef struct {
@@ -443,7 +446,9 @@ int32_t hstpf_reset(hstpf_t *f);
  * Cost: O(n_models x n_particles): per particle two RNG draws and table
  * samples, the model update, one log-density and one exp look-up; per model
  * one log(); bounded. The Kalman engine: O(n_models), about 60 flops and
- * one log() per model. Stack below 1 KiB (560 B measured on a Cortex-M4F
+ * one log() per model. The grid engine: O(n_models x HSTPF_GRID_NS x
+ * HSTPF_GRID_NV x kernel taps), a few log() per model, bounded (docs/grid.md
+ * measures it). Stack below 1 KiB (560 B measured on a Cortex-M4F
  * with libm, docs/footprint.md); no other memory.
  */
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
