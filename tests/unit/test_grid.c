@@ -153,6 +153,56 @@ static void test_gaussian_vs_kalman(void **state)
     assert_true(sum_all / n <= 0.08);
 }
 
+/* The same on a hilly track that both filters know (grades of +-12 per
+ * mille every few km, curves): the grid takes the gradient at each
+ * model's mean position, the Kalman engine at its mean; the true model's
+ * increments must agree as on the flat line. */
+static void test_track_vs_kalman(void **state)
+{
+    static const hstpf_track_seg_t track[] = {
+        {0.0, 0.0, 0.0},        {3000.0, 12.0, 0.0},     {9000.0, 3.0, 7000.0},
+        {14000.0, -12.0, 0.0},  {20000.0, 8.0, 5500.0},  {28000.0, 12.0, 0.0},
+        {36000.0, -6.0, 0.0},   {44000.0, 10.0, 8000.0}, {54000.0, -12.0, 0.0},
+    };
+    hstpf_sim_config_t sc;
+    hstpf_config_t c;
+    hstpf_theta_t m[3];
+    hstpf_sim_t sim;
+    hstpf_sim_sample_t smp;
+    hstpf_input_t in;
+    double mx = 0.0, sum = 0.0;
+    int k, n = 0;
+    (void)state;
+    setup(1, 2, &sc, &c, m);
+    sc.track = track;
+    sc.n_track = (uint16_t)(sizeof track / sizeof track[0]);
+    c.track = track;
+    c.n_track = sc.n_track;
+    assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
+    c.engine = HSTPF_ENGINE_KALMAN;
+    assert_int_equal(hstpf_init(&fb, sizeof fb, &c), HSTPF_OK);
+    hstpf_sim_init(&sim, &sc);
+    for (k = 0; k <= 900; ++k) {
+        hstpf_estimate_t eg, ek;
+        double d;
+        hstpf_sim_next_input(&sim, &smp, &in);
+        assert_int_equal(hstpf_step(&fa, &in), HSTPF_OK);
+        assert_int_equal(hstpf_step(&fb, &in), HSTPF_OK);
+        (void)hstpf_estimate(&fa, &eg);
+        (void)hstpf_estimate(&fb, &ek);
+        if (k < 10) {
+            continue;
+        }
+        d = fabs((double)eg.model[1].loglik - (double)ek.model[1].loglik);
+        mx = d > mx ? d : mx;
+        sum += d;
+        ++n;
+    }
+    print_message("hilly track, true model |d loglik|: max %.4f mean %.4f over %d steps\n", mx, sum / n, n);
+    assert_true(mx <= 0.15);
+    assert_true(sum / n <= 0.015);
+}
+
 /* ---- the particle reference for Case 2, double, exact densities -------- */
 
 #define REF_M 20000
@@ -370,6 +420,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gaussian_vs_kalman),
+        cmocka_unit_test(test_track_vs_kalman),
         cmocka_unit_test(test_case2_vs_particle_reference),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_mass_and_sign),
