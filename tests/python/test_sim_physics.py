@@ -43,3 +43,22 @@ def test_departure_from_rest():
     assert run.u[0] == pytest.approx(model.PAPER_ACCEL / XI + th.c0)
     assert run.v[1] == pytest.approx(model.PAPER_ACCEL)
     assert run.s[1] == 0.0 and run.s[2] == pytest.approx(model.PAPER_ACCEL)
+
+
+@pytest.mark.parametrize("profile,duration,rests", [("line", 2460.0, 6), ("day", 14400.0, 13)])
+def test_journey_profiles_noise_free(profile, duration, rests):
+    """hstpf-mc's timetables in Python, without noise: the origin's dwell and
+    every station's 120 s exactly, held with the brake reported, no
+    reversal, cruise speeds as listed (<= 300 km/h on the line, 350 in the day)."""
+    run = model.simulate(model.theta_for("CRH3"), profile, duration, 1.0, model.NOISE_CASES["none"])
+    v = run.v
+    starts = [k for k in range(len(v)) if v[k] == 0.0 and (k == 0 or v[k - 1] > 0.0)]
+    ends = [k - 1 for k in range(1, len(v)) if v[k] > 0.0 and v[k - 1] == 0.0]  # departure samples
+    assert len(starts) == rests
+    first = 30 if profile == "line" else 60
+    assert ends[0] - starts[0] == first
+    assert all(e - s == 120 for s, e in zip(starts[1:], ends[1:]))
+    assert v.min() >= 0.0 and np.all(np.diff(run.s) >= 0.0)
+    assert v.max() * 3.6 == pytest.approx(300.0 if profile == "line" else 350.0)
+    for s, e in zip(starts, ends):
+        assert np.all(run.u[s:e] == model.HOLD_BRAKE)

@@ -166,6 +166,28 @@ PROFILES = {
     "stops": [("accel", 250.0, 0.4), ("cruise", 400.0), ("brake", 0.0, 0.5), ("stop", 120.0)],
 }
 
+
+def _journey(first_dwell_s, legs):
+    """Phases of a timetable as hstpf-mc's journeys (tools/montecarlo/mc.c):
+    legs of (cruise km/h, s from departure to braking, dwell s; < 0 = run to
+    the end), accelerating at 0.4 and braking at 0.5 m/s^2; held at the end."""
+    ph = [("stop", first_dwell_s)] if first_dwell_s > 0 else []
+    for kmh, run_s, dwell_s in legs:
+        ph.append(("accel", kmh, 0.4))
+        if dwell_s < 0:
+            return ph + [("cruise", 1e12)]
+        ph += [("cruise", max(0.0, run_s - kmh / 3.6 / 0.4)), ("brake", 0.0, 0.5), ("stop", dwell_s)]
+    return ph + [("stop", 1e12)]
+
+
+# hstpf-mc's "stops" line (41 min, 5 stations) and "day" (4 h, 12 stations).
+PROFILES["line"] = _journey(30.0, [(300, 250, 120), (250, 200, 120), (300, 250, 120), (200, 150, 120),
+                                   (300, 200, 120)])
+PROFILES["day"] = _journey(60.0, [(300, 900, 120), (250, 600, 120), (350, 1200, 120), (200, 400, 120),
+                                  (300, 800, 120), (160, 300, 120), (300, 1000, 120), (250, 600, 120),
+                                  (350, 1100, 120), (200, 500, 120), (300, 900, 120), (250, 700, 120),
+                                  (300, 0, -1)])
+
 HOLD_BRAKE = -50.0  # N/kN: the holding brake, reported as traction during a "stop"
 
 
