@@ -69,6 +69,8 @@ typedef struct {
     long cover_p, cover_v, n_cover; /* steps inside the 95 % intervals, steps counted */
     long assert_fail;           /* steps where declared, status and theta disagree */
     double outage_s;            /* outage length drawn for this run, s */
+    long out_cover_p, out_cover_v, n_out; /* the same, outage steps only */
+    double out_pe_max;          /* max |position error| during the outage */
 } journey_t;
 
 /* Filter settings under study: the same for every scenario and truth. */
@@ -277,6 +279,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         }
         if (out_start >= 0.0 && smp.t < out_start + jr->outage_s) {
             in.has_position = 0;
+            ++jr->n_out;
         }
         if (w->sc->clock_step_s != 0.0 && smp.t == w->sc->clock_at_s) {
             if (w->sc->clock_step_s > 0.0) {
@@ -300,6 +303,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             jr->cover_p += fabs(ep) <= 1.96 * est.position_sd_m;
             jr->cover_v += fabs(ev) <= 1.96 * (double)est.speed_sd_mps;
             ++jr->n_cover;
+            if (!in.has_position && out_start >= 0.0) {
+                jr->out_cover_p += fabs(ep) <= 1.96 * est.position_sd_m;
+                jr->out_cover_v += fabs(ev) <= 1.96 * (double)est.speed_sd_mps;
+                jr->out_pe_max = fabs(ep) > jr->out_pe_max ? fabs(ep) : jr->out_pe_max;
+            }
             if (smp.t == t_event + 10.0) {
                 jr->pe10 = fabs(ep);
             } else if (smp.t > t_event + 10.0 && fabs(ep) > jr->pe_max_after) {
@@ -523,7 +531,8 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     double *pe_all = malloc(sizeof(double) * (size_t)all);
     int n_tv_all = 0, n_pe_all = 0, j, i, k;
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
-    long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0;
+    long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
+    double o_pe = 0.0;
     double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
     if (tv_all == NULL || pe_all == NULL) {
         fprintf(stderr, "out of memory\n");
@@ -571,6 +580,10 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             cv += q->cover_v;
             n += q->n_cover;
             as += q->assert_fail;
+            o_cp += q->out_cover_p;
+            o_cv += q->out_cover_v;
+            o_n += q->n_out;
+            o_pe = q->out_pe_max > o_pe ? q->out_pe_max : o_pe;
         }
         {
             const double tvmax = pct(tv, ntv, 1.0), pe10max = pct(pe, npe, 1.0);
@@ -623,12 +636,12 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                 fprintf(jf,
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
-                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"pos_rms\":%.4g,\"spd_rms\":%.4g}",
+                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g}",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
-                        q->outage_s, r->pos_rms, r->spd_rms);
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms);
             }
             fprintf(jf, "]}");
         }
@@ -645,6 +658,11 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
+    if (o_n > 0) {
+        printf("outage: %ld steps without a fix; 95%% coverage there position %.1f%% speed %.1f%%; "
+               "max |position error| %.1f m\n",
+               o_n, 100.0 * (double)o_cp / (double)o_n, 100.0 * (double)o_cv / (double)o_n, o_pe);
+    }
     free(tv_all);
     free(pe_all);
 }
