@@ -58,6 +58,9 @@ static void reset_state(hstpf_t *f)
     f->declared = -1;
     f->status = HSTPF_STATUS_UNDECIDED;
     f->have_fix = 0;
+    f->have_pend = 0;
+    f->ever_locked = 0;
+    f->standstill = 0;
     f->outlier_run = 0;
 }
 
@@ -134,13 +137,47 @@ int32_t hstpf_reset(hstpf_t *f)
     return HSTPF_OK;
 }
 
-/* Every model placed at the first fix, with the speed prior. */
-static void first_fix(hstpf_t *f, double y)
+/* Lock from fixes: with a configured speed prior the first fix starts the
+ * filter; otherwise a fix waits for the next one (at most max_gap_s later,
+ * with a speed that is physically possible) and both place the models. The
+ * model weights and the declaration are kept. Returns 1 when locked now. */
+static int acquire(hstpf_t *f, double y, double xu)
 {
+    hstpf__acq_t q;
+    q.xu = xu;
+    q.v0 = f->cfg.init_speed_mps;
+    q.t12 = 0.0;
+    if (f->cfg.init_speed_sd <= 0.0) {
+        const double t = f->pend_age_s;
+        if (!f->have_pend || !(t > 0.0 && t <= f->cfg.max_gap_s) ||
+            fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
+            f->have_pend = 1;
+            f->pend_y = y;
+            f->pend_age_s = 0.0;
+            return 0;
+        }
+        q.t12 = t;
+    }
     f->origin_m = floor(y);
     hstpf__track_rebase(f);
-    hstpf__engine_of(f)->place_all(f, (real)(y - f->origin_m), (real)f->cfg.init_speed_mps);
+    q.y1 = f->pend_y - f->origin_m;
+    q.y2 = y - f->origin_m;
+    hstpf__engine_of(f)->place_all(f, &q);
+    f->have_pend = 0;
     f->have_fix = 1;
+    f->ever_locked = 1;
+    f->outlier_run = 0;
+    ++f->acquisitions;
+    return 1;
+}
+
+/* Drops the lock; the next fixes acquire again. keep_pend: the last fix
+ * (a gated one) belongs to the new time base and may pair with the next. */
+static void drop_lock(hstpf_t *f, int keep_pend)
+{
+    f->have_fix = 0;
+    f->have_pend = (uint8_t)(keep_pend && f->have_pend);
+    f->standstill = 0;
 }
 
 static void update_model_weights(hstpf_t *f)
@@ -173,7 +210,9 @@ static void update_model_weights(hstpf_t *f)
     }
 }
 
-static void update_declaration(hstpf_t *f, double dt)
+/* The declaration state machine of hstpf.h. The hold timer runs only on
+ * steps that carry evidence: not at standstill, not without a fix. */
+static void update_declaration(hstpf_t *f, double dt, int evidence)
 {
     int16_t best = 0;
     uint16_t l;
@@ -182,9 +221,14 @@ static void update_declaration(hstpf_t *f, double dt)
             best = (int16_t)l;
         }
     }
+    if (f->declared >= 0 && exp(f->m[f->declared].logq) < f->cfg.withdraw_threshold) {
+        f->declared = -1;
+        f->status = HSTPF_STATUS_WITHDRAWN;
+        f->decision_time_s = -1.0;
+    }
     if (exp(f->m[best].logq) > f->cfg.declare_threshold) {
         if (best == f->leader) {
-            f->held_s += dt;
+            f->held_s += evidence ? dt : 0.0;
         } else {
             f->leader = best;
             f->held_s = 0.0;
@@ -260,16 +304,86 @@ static void models_reacquire(hstpf_t *f, real yr)
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         if (m->floor_run >= f->cfg.model_reacquire_after) {
-            e->place_one(f, m, yr, (real)vb);
+            hstpf__acq_t q;
+            q.y1 = q.y2 = (double)yr;
+            q.t12 = 0.0;
+            q.xu = 0.0;
+            q.v0 = vb;
+            e->place_one(f, m, &q);
             m->floor_run = 0;
             ++m->reacquired;
         }
     }
 }
 
+int32_t hstpf_reacquire(hstpf_t *f)
+{
+    if (f == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    drop_lock(f, 0);
+    return HSTPF_OK;
+}
+
+static int finite_models(const hstpf_t *f)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        if (!fin((double)m->s_mean) || !fin((double)m->v_mean) || !fin((double)m->s_var) ||
+            !fin((double)m->v_var) || !fin(m->logq)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* A filter that went non-finite starts again from the next fixes: uniform
+ * weights if those are lost too. Counted in nonfinite_resets. */
+static void nonfinite_reset(hstpf_t *f)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        if (!fin(f->m[l].logq)) {
+            for (l = 0; l < f->cfg.n_models; ++l) {
+                f->m[l].logq = -log((double)f->cfg.n_models);
+            }
+            break;
+        }
+    }
+    ++f->nonfinite_resets;
+    drop_lock(f, 0);
+}
+
+/* Standstill: every model that carries weight is held at rest. The data
+ * then say nothing about W(v) (docs/model.md), so no model weight moves. */
+static int at_standstill(const hstpf_t *f)
+{
+    double wb[HSTPF_MAX_MODELS];
+    uint16_t l;
+    blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        if (wb[l] > 0.0 && !f->m[l].held) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Time passes without a lock: only the pending fix ages. */
+static void advance_time(hstpf_t *f, double dt)
+{
+    f->time_s += dt;
+    f->pend_age_s += dt;
+    ++f->steps;
+}
+
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
 {
-    const int has_y = (in != NULL && in->has_position) ? 1 : 0;
+    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0;
     const hstpf__engine_t *e;
     hstpf__step_t st;
     if (f == NULL || in == NULL) {
@@ -287,13 +401,17 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (fabs(in->traction) > HSTPF_U_MAX || (has_y && fabs(in->position_m) > HSTPF_POS_MAX_M)) {
         return HSTPF_E_RANGE;
     }
+    if (f->have_fix && in->dt_s > f->cfg.max_gap_s) {
+        drop_lock(f, 0); /* too long to predict across: re-acquire */
+        f->have_pend = 0;
+    }
     if (!f->have_fix) {
+        advance_time(f, in->dt_s);
         if (has_y) {
-            first_fix(f, in->position_m);
-            update_declaration(f, in->dt_s);
+            (void)acquire(f, in->position_m, f->xi * in->traction);
         }
-        f->time_s += in->dt_s;
-        ++f->steps;
+        f->standstill = 0;
+        update_declaration(f, in->dt_s, 0);
         return HSTPF_OK;
     }
     if (has_y && f->cfg.gate_m > 0.0 &&
@@ -301,19 +419,26 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
             ++f->outliers;
             ++f->outlier_run;
-            return HSTPF_E_OUTLIER;
+            /* the step goes on without its fix; the fix is remembered: a
+             * run of these may be the new reference */
+            gated = 1;
+            f->have_pend = 1;
+            f->pend_y = in->position_m;
+            f->pend_age_s = -in->dt_s; /* aged to 0 at the end of this step */
+        } else {
+            /* the reference really moved: acquire again from the gated fixes */
+            ++f->reacquired;
+            drop_lock(f, 1);
+            advance_time(f, in->dt_s);
+            (void)acquire(f, in->position_m, f->xi * in->traction);
+            update_declaration(f, in->dt_s, 0);
+            return HSTPF_OK;
         }
-        /* the reference really moved: start the particles again there */
-        f->outlier_run = 0;
-        ++f->reacquired;
-        first_fix(f, in->position_m);
-        f->time_s += in->dt_s;
-        ++f->steps;
-        return HSTPF_OK;
     }
-    if (has_y) {
+    if (has_y && !gated) {
         f->outlier_run = 0;
     }
+    has_y = has_y && !gated;
     /* all checks passed: from here on the step cannot fail */
     e = hstpf__engine_of(f);
     st.dt = in->dt_s;
@@ -322,7 +447,8 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     st.scale = (double)(real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
     st.has_y = has_y;
     e->predict_update(f, &st);
-    if (has_y) {
+    f->standstill = (uint8_t)at_standstill(f);
+    if (has_y && !f->standstill) {
         update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {
@@ -331,17 +457,40 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (e->after_weights != NULL) {
         e->after_weights(f, &st);
     }
-    f->time_s += in->dt_s;
-    ++f->steps;
-    update_declaration(f, in->dt_s);
+    advance_time(f, in->dt_s);
+    if (!finite_models(f)) {
+        nonfinite_reset(f);
+        update_declaration(f, in->dt_s, 0);
+        return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
+    }
+    update_declaration(f, in->dt_s, has_y && !f->standstill);
     rebase(f);
-    return HSTPF_OK;
+    return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
+}
+
+/* Every published value finite and within the header's ranges. */
+static int in_ranges(const hstpf_estimate_t *o)
+{
+    const double vals[] = {o->position_m, (double)o->speed_mps, o->position_sd_m, (double)o->speed_sd_mps,
+                           (double)o->theta[0], (double)o->theta[1], (double)o->theta[2],
+                           (double)o->resistance};
+    uint32_t i;
+    for (i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
+        if (!fin(vals[i])) {
+            return 0;
+        }
+    }
+    return fabs(o->position_m) <= HSTPF_POS_MAX_M && o->speed_mps >= (real)0 &&
+           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->position_sd_m >= 0.0 &&
+           o->speed_sd_mps >= (real)0 && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
+           o->theta[2] >= (real)0;
 }
 
 int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
 {
     uint16_t l;
-    double v = 0.0, th[3] = {0.0, 0.0, 0.0};
+    double s = 0.0, v = 0.0, vs = 0.0, vv = 0.0, th[3] = {0.0, 0.0, 0.0};
+    double wb[HSTPF_MAX_MODELS];
     int16_t best = 0;
     if (f == NULL || out == NULL) {
         return HSTPF_E_NULL;
@@ -353,11 +502,9 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->step = f->steps;
     out->time_s = f->time_s;
     out->n_models = f->cfg.n_models;
-    double wb[HSTPF_MAX_MODELS];
     blend_weights(f, wb);
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        const double q = wb[l];
         hstpf_model_out_t *o = &out->model[l];
         o->q = (real)exp(m->logq);
         o->position_m = f->origin_m + (double)m->s_mean;
@@ -366,16 +513,32 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
         o->loglik = m->loglik;
         o->floor_hits = m->floor_hits;
         o->reacquired = m->reacquired;
-        v += q * (double)m->v_mean;
-        th[0] += q * f->theta[l].c0;
-        th[1] += q * f->theta[l].c1;
-        th[2] += q * f->theta[l].c2;
+        s += wb[l] * (double)m->s_mean;
+        v += wb[l] * (double)m->v_mean;
+        th[0] += wb[l] * f->theta[l].c0;
+        th[1] += wb[l] * f->theta[l].c1;
+        th[2] += wb[l] * f->theta[l].c2;
         if (m->logq > f->m[best].logq) {
             best = (int16_t)l;
         }
     }
-    out->position_m = f->have_fix ? f->origin_m + blended_position(f, 0.0) : 0.0;
+    /* the mixture's variance: within each model plus between the models */
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const double ds = (double)m->s_mean - s, dv = (double)m->v_mean - v;
+        vs += wb[l] * ((double)m->s_var + ds * ds);
+        vv += wb[l] * ((double)m->v_var + dv * dv);
+    }
+    if (f->declared >= 0) {
+        /* Table 2, State A(2): a declared type's own coefficients */
+        th[0] = f->theta[f->declared].c0;
+        th[1] = f->theta[f->declared].c1;
+        th[2] = f->theta[f->declared].c2;
+    }
+    out->position_m = f->ever_locked ? f->origin_m + s : (f->have_pend ? f->pend_y : 0.0);
     out->speed_mps = (real)v;
+    out->position_sd_m = sqrt(vs > 0.0 ? vs : 0.0);
+    out->speed_sd_mps = (real)sqrt(vv > 0.0 ? vv : 0.0);
     out->theta[0] = (real)th[0];
     out->theta[1] = (real)th[1];
     out->theta[2] = (real)th[2];
@@ -383,12 +546,15 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
         const hstpf_theta_t t = {NULL, th[0], th[1], th[2]};
         out->resistance = (real)hstpf_resistance(&t, v);
     }
+    out->standstill = f->standstill;
     out->best = best;
     out->declared = f->declared;
     out->status = f->status;
     out->decision_time_s = f->decision_time_s;
     out->outliers = f->outliers;
     out->reacquired = f->reacquired;
+    out->acquisitions = f->acquisitions;
+    out->nonfinite_resets = f->nonfinite_resets;
+    out->valid = (uint8_t)(f->have_fix && in_ranges(out));
     return HSTPF_OK;
 }
-

@@ -26,7 +26,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->noise_e.sd = sqrt(5.0);
     cfg->dt_nominal_s = 1.0;
     cfg->init_speed_mps = 0.0;
-    cfg->init_speed_sd = 1.0;
+    cfg->init_speed_sd = 0.0; /* unknown: from the first two fixes */
     cfg->resample = HSTPF_RESAMPLE_ESS;
     cfg->ess_threshold = 0.5;
     cfg->roughening_k = 0.2;

@@ -154,8 +154,12 @@ typedef struct {
     /** Noise samples are scaled by sqrt(T / dt_nominal_s): exact for a
      *  Gaussian random walk, a first-order approximation otherwise (1 s). */
     double dt_nominal_s;
-    double init_speed_mps;       /**< prior speed mean at the first fix (0) */
-    double init_speed_sd;        /**< prior speed sd, >= 0 (1 m/s) */
+    double init_speed_mps;       /**< prior speed mean, m/s, used when init_speed_sd > 0 (0) */
+    /** Speed prior at acquisition, m/s. 0 (the default): unknown; the
+     *  filter acquires position and speed from its first two fixes (at any
+     *  speed, with no other configuration). > 0: the first fix alone
+     *  starts the filter with the speed N(init_speed_mps, init_speed_sd). */
+    double init_speed_sd;
     hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
     double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
     /** Roughening after resampling: jitter sd = k * spread * M^(-1/2) per
@@ -299,6 +303,8 @@ typedef struct {
     hstpf_real_t k0, k1, k2;              /* xi c0, xi c1 3.6, xi c2 3.6^2 */
     double logq;
     hstpf_real_t s_mean, v_mean, ess, loglik;
+    hstpf_real_t s_var, v_var;            /* posterior variances */
+    uint8_t held;                         /* the whole posterior held at rest this step */
     uint32_t floor_hits, reacquired;
     uint16_t floor_run;                   /* consecutive all-floor steps */
     uint16_t track_hint;
@@ -336,7 +342,13 @@ typedef struct {
     hstpf_status_t status;
     uint32_t outliers, reacquired;
     uint16_t outlier_run;            /* consecutive gated measurements */
-    uint8_t have_fix;
+    uint8_t have_fix;                /* locked: acquired and tracking */
+    uint8_t have_pend;               /* one fix waiting for a second to acquire */
+    uint8_t standstill;              /* this step's model weights were held */
+    uint8_t ever_locked;
+    double pend_y;                   /* that fix, absolute m */
+    double pend_age_s;               /* time since it */
+    uint32_t acquisitions, nonfinite_resets;
     uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
 } hstpf_t;
 
@@ -385,6 +397,15 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(models).
  */
 int32_t hstpf_reset(hstpf_t *f);
+
+/**
+ * @brief Drops the lock: the filter re-acquires position and speed from the
+ * next fixes (as at the start), keeping the model weights and the
+ * declaration. For a caller that knows the time base broke (a receive-clock
+ * step). The estimate reads valid = 0 until re-acquired.
+ * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(1).
+ */
+int32_t hstpf_reacquire(hstpf_t *f);
 
 /**
  * @brief Advances every model by one step and, with a position, updates
