@@ -19,15 +19,6 @@
 
 #define MAXM HSTPF_MAX_MODELS
 
-/* TEMPORARY until the library's hstpf_reacquire() (issue 9) is merged: a
- * weak stand-in that does nothing, replaced by the library's definition. */
-int32_t hstpf_reacquire(hstpf_t *f);
-__attribute__((weak)) int32_t hstpf_reacquire(hstpf_t *f)
-{
-    (void)f;
-    return HSTPF_E_INIT;
-}
-
 typedef struct {
     const char *name;
     int paper_case;             /* 1 or 2: noise of the paper's case */
