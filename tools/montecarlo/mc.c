@@ -102,7 +102,8 @@ typedef struct {
     int next;                   /* job counter, under lock */
     int done;                   /* runs finished, under lock */
     pthread_mutex_t lock;
-    const char *trace_path;     /* first run of the first job */
+    const char *trace_path;     /* run of trace_seed of the first job */
+    int trace_seed;
 } work_t;
 
 static const hstpf_track_seg_t hilly_track[] = {
@@ -253,7 +254,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     }
     hstpf_sim_init(&sim, &sc);
     if (trace) {
-        fprintf(trace, "t,s_true,v_true,u,y,has_y,s_est,v_est,c0,c1,c2,declared");
+        fprintf(trace, "t,s_true,v_true,u,y,has_y,s_est,v_est,c0,c1,c2,declared,status,standstill,valid,"
+                       "pos_sd,spd_sd");
         for (k = 0; k < w->n_models; ++k) {
             fprintf(trace, ",q%d", k);
         }
@@ -360,9 +362,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             r->t_declare = -1.0;
         }
         if (trace) {
-            fprintf(trace, "%.0f,%.3f,%.4f,%.4f,%.3f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d", smp.t, smp.s,
-                    smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
-                    (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared);
+            fprintf(trace, "%.0f,%.3f,%.4f,%.4f,%.3f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d,%d,%d,%d,%.3f,%.4f", smp.t,
+                    smp.s, smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
+                    (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared,
+                    (int)est.status, est.standstill, est.valid, est.position_sd_m, (double)est.speed_sd_mps);
             for (k = 0; k < w->n_models; ++k) {
                 fprintf(trace, ",%.6g", (double)est.model[k].q);
             }
@@ -409,7 +412,7 @@ static void *worker(void *arg)
         }
         job = idx / w->seeds;
         seed = idx % w->seeds;
-        if (idx == 0 && w->trace_path) {
+        if (job == 0 && seed + 1 == w->trace_seed && w->trace_path) {
             trace = fopen(w->trace_path, "w");
         }
         one_run(w, w->truths[job], seed + 1, &w->runs[idx], trace);
@@ -663,7 +666,7 @@ static void usage(void)
     size_t i;
     fprintf(stderr,
             "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
-            "  [--truth NAME] [--json FILE] [--trace FILE] [--progress] [--version]\n"
+            "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
             "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
@@ -695,6 +698,7 @@ int main(int argc, char **argv)
     memset(&st, 0, sizeof st);
     (void)hstpf_config_default(&st.base);
     memset(&w, 0, sizeof w);
+    w.trace_seed = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--version")) {
@@ -724,6 +728,8 @@ int main(int argc, char **argv)
             json = v;
         } else if (!strcmp(a, "--trace")) {
             w.trace_path = v;
+        } else if (!strcmp(a, "--trace-seed")) {
+            w.trace_seed = atoi(v);
         } else if (!strcmp(a, "--engine")) {
             if (!strcmp(v, "auto")) {
                 st.base.engine = HSTPF_ENGINE_AUTO;
