@@ -195,7 +195,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     journey_t *jr = &r->j;
     double q_rest[MAXM], out_start = -1.0, last_rest_t = -1e9;
     const double t_event = w->sc->clock_step_s != 0.0 ? w->sc->clock_at_s : 0.0;
-    int at_rest = 0, have_fix = 0;
+    int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     if (f == NULL) {
         fprintf(stderr, "out of memory\n");
         exit(1);
@@ -323,9 +323,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             if (jr->n_stops < MAX_STOPS) {
                 jr->tv[jr->n_stops] = tv_dist(q_rest, &est, w->n_models); /* so far */
             }
+            at_rest = smp.held ? 2 : at_rest; /* a stop: held at some step (not a clamp at departure) */
         } else if (at_rest) {
+            jr->n_stops += at_rest == 2 && jr->n_stops < MAX_STOPS;
             at_rest = 0;
-            jr->n_stops += jr->n_stops < MAX_STOPS;
         }
         qt = (double)est.model[truth].q;
         if (!(qt > thr)) {
@@ -376,7 +377,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->pos_rms = sqrt(se_p / n_after);
     r->spd_rms = sqrt(se_v / n_after);
     r->pos_bias = sb_p / n_after;
-    jr->n_stops += at_rest && jr->n_stops < MAX_STOPS; /* ended standing */
+    jr->n_stops += at_rest == 2 && jr->n_stops < MAX_STOPS; /* ended standing */
     jr->outliers = est.outliers;
     jr->reacquired = est.reacquired;
     jr->acquisitions = est.acquisitions;
