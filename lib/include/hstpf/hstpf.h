@@ -189,7 +189,7 @@ typedef struct {
      *  (0, HSTPF_DT_MAX_S] (30). */
     double max_gap_s;
     /** Measurements farther than this from the predicted position are
-     *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
+     *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000). */
     double gate_m;
     /** After this many consecutive gated measurements the next one is
      *  taken as a new first fix (particles redrawn there, model weights
@@ -373,8 +373,9 @@ int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field);
 /**
  * @brief Initialises an instance: validates cfg, copies the models and the
  * track, builds the noise tables and seeds one RNG stream per model.
- * Particles are drawn at the first step that carries a position:
- * s = y - e_i (e_i from the measurement noise), v from the speed prior.
+ * The models are placed when the filter acquires lock from its first fixes
+ * (docs/model.md, "Acquisition and lock"): from two fixes with the default
+ * diffuse speed prior, from the first with a configured one.
  * @param f       caller-owned instance.
  * @param f_size  sizeof(hstpf_t) as the caller sees it (HSTPF_E_ABI if it
  *                differs from the library's: mismatched capacity macros).
@@ -410,12 +411,17 @@ int32_t hstpf_reacquire(hstpf_t *f);
 /**
  * @brief Advances every model by one step and, with a position, updates
  * particle weights, model weights and the declaration.
- * Before the first fix, steps without a position only advance time.
+ * Without lock (before the first fixes, after a step longer than
+ * max_gap_s, after hstpf_reacquire() or a non-finite state) a step only
+ * advances time and its fix serves the acquisition. While every weighted
+ * model is held at rest the model weights are not updated (standstill).
  * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_INIT; HSTPF_E_NONFINITE (dt,
  *   traction or position NaN/Inf); HSTPF_E_DT; HSTPF_E_RANGE (|traction| >
- *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M); HSTPF_E_OUTLIER (position
- *   farther than gate_m from the blended prediction). On error *f is
- *   unchanged and the next valid step proceeds normally.
+ *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M): on these *f is unchanged.
+ *   HSTPF_E_OUTLIER (position farther than gate_m from the blended
+ *   prediction): the step WAS taken, as a prediction without the fix; the
+ *   outlier counters advance and the fix is kept as a possible first fix
+ *   of a re-acquisition (after reacquire_after in a row).
  * Cost: O(n_models x n_particles): per particle two RNG draws and table
  * samples, the model update, one log-density and one exp look-up; per model
  * one log(); bounded. The Kalman engine: O(n_models), about 60 flops and
@@ -425,8 +431,9 @@ int32_t hstpf_reacquire(hstpf_t *f);
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
 
 /**
- * @brief Writes the current estimate. Before the first fix the states are
- * zero and the weights uniform.
+ * @brief Writes the current estimate. Before the first acquisition the states
+ * are zero (the position is the pending fix, if any) and the weights
+ * uniform; out->valid says whether the estimate may be used.
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(n_models).
  */
 int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
