@@ -151,6 +151,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         r->loglik = 0.0;
     } else if (vd < 0.0) {
         /* comes to rest within the step: v' = 0 exactly, no speed spread */
+        r->held = 1;
         for (i = 0; i < NZ; ++i) {
             f1[i] = 0.0;
         }
