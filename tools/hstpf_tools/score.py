@@ -13,6 +13,7 @@ Frame times are mapped to simulation time in one of two ways:
 """
 import argparse
 import csv
+import io
 import json
 import math
 import sys
@@ -21,7 +22,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from . import e2e
+from . import cli, e2e
 from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
                      type_name)
 from .logio import read_log
@@ -31,8 +32,7 @@ V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
 
 
 def read_truth(path: str) -> Dict[str, np.ndarray]:
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = list(csv.DictReader(io.StringIO(cli.read_text(path))))
     if not rows:
         raise ValueError(f"{path}: no rows")
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
@@ -210,16 +210,18 @@ def _save(fig, path: Path) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
-                                epilog=__doc__.split("\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("log", help="recorded log with the estimator's frames")
+    p = cli.Parser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
+                   epilog=__doc__.split("\n", 2)[2] + "\nExit codes: 0 done, 2 usage, 3 an input cannot be read "
+                   "or is not valid, 5 no estimator frame in the log, 6 an output cannot be written (docs/tools.md).",
+                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("log", help="recorded log with the estimator's frames; '-': candump text on stdin")
     p.add_argument("--truth", required=True, help="truth CSV from hstpf-simulate")
     p.add_argument("--input-log", help="the simulated input log (for --align inputs)")
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
     p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
-    p.add_argument("--json", help="write the metrics as JSON here ('-' for stdout)")
+    cli.add_json_argument(p, what="the metrics as JSON (compact; with '-' the table goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     return p
@@ -233,43 +235,60 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def main(argv=None) -> int:
+def _main(argv) -> int:
     a = build_parser().parse_args(argv)
     align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
     if align == "inputs" and not a.input_log:
-        print("hstpf-score: --align inputs needs --input-log", file=sys.stderr)
-        return 2
-    codec = FrameCodec(a.dbc, timeout_s=math.inf)
+        raise cli.CliError(cli.EXIT_USAGE, "--align inputs needs --input-log")
+    if a.speed <= 0:
+        raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
+    if [a.log, a.input_log, a.truth].count("-") > 1:
+        raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
+    try:
+        codec = FrameCodec(a.dbc, timeout_s=math.inf)
+    except Exception as exc:  # missing or unreadable DBC
+        raise cli.input_error(a.dbc or "the DBC", exc) from exc
     input_map: Dict[bytes, float] = {}
     if align == "inputs":
-        inp = read_log(a.input_log)
+        inp = cli.load_log(a.input_log)
         pos_id = codec.message(POSITION).frame_id
         t_first = inp[0].timestamp if inp else 0.0
         for m in inp:
             if m.arbitration_id == pos_id:
                 input_map.setdefault(bytes(m.data), m.timestamp - t_first)
-    truth = read_truth(a.truth)
-    series, e2e_res = collect(read_log(a.log), codec, align, input_map, a.t0, a.speed)
+    try:
+        truth = read_truth(a.truth)
+    except (KeyError, ValueError, IndexError) as exc:
+        raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
+    series, e2e_res = collect(cli.load_log(a.log), codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
     res["align"] = align
     res["output_e2e"] = e2e_res
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
-        res["plots"] = plots(series, truth, Path(a.plots))
+        try:
+            res["plots"] = plots(series, truth, Path(a.plots))
+        except OSError as exc:
+            raise cli.output_error(a.plots, exc) from exc
+    table = sys.stderr if a.json == "-" else sys.stdout  # '--json -': nothing but JSON on stdout
     for k, v in res.items():
         if k not in ("output_e2e", "health", "frames"):
-            print(f"{k:38s} {_fmt(v)}")
+            print(f"{k:38s} {_fmt(v)}", file=table)
     if "health" in res:
-        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()))
+        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()), file=table)
     bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
-    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}))
+    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}), file=table)
     if a.json:
-        text = json.dumps(res, indent=1)
-        if a.json == "-":
-            print(text)
-        else:
-            Path(a.json).write_text(text + "\n")
-    return 0
+        cli.emit_report(res, a.json)
+    if not any(res["frames"].values()):
+        print(f"hstpf-score: no estimator frame in {a.log}" + (" could be timed by its inputs"
+              if align == "inputs" and e2e_res else ""), file=sys.stderr)
+        return cli.EXIT_NO_TRAFFIC
+    return cli.EXIT_OK
+
+
+def main(argv=None) -> int:
+    return cli.run("hstpf-score", _main, argv)
 
 
 if __name__ == "__main__":
