@@ -13,8 +13,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from hstpf_tools.table1 import TABLE1  # noqa: E402
+
+
+def theta_for(name):
+    return next(r for r in TABLE1 if r[0] == name)
+
 CASE_MODELS = {1: ["SS1/SS3/SS4", "CRH3", "SS8"], 2: ["CRH1", "CRH3", "CRH5"]}
-CRH3 = (0.79, 0.0064, 0.000115)
+CRH3 = theta_for("CRH3")[1:]  # Table 1, from lib/src/train_types.c
 
 
 def load_trace(path):
