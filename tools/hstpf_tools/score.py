@@ -16,19 +16,22 @@ import csv
 import io
 import json
 import math
+import re
 import sys
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from . import cli, e2e
+from . import cli, e2e, runconfig
 from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
                      type_name)
 from .logio import read_log
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
+OUTPUT_SENDER = "HSTPF"  # the DBC node of the estimator: its frames are the outputs
+Z95 = 1.959963984540054  # two-sided 95 % of a normal distribution
 
 
 def read_truth(path: str) -> Dict[str, np.ndarray]:
@@ -38,6 +41,7 @@ def read_truth(path: str) -> Dict[str, np.ndarray]:
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
+    out["identity"] = {k: r0[k] for k in ("type", "seed", "noise", "profile") if r0.get(k)}
     return out
 
 
@@ -73,7 +77,9 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
-            continue
+            if name is None or OUTPUT_SENDER not in (codec.message(name).senders or ()):
+                continue  # inputs and unknown IDs
+            series[name] = []  # an estimator frame this tool has no name for (e.g. the sd of the state)
         e2e_results.setdefault(name, {}).setdefault(res, 0)
         e2e_results[name][res] += 1
         if sig is None:
@@ -137,7 +143,51 @@ def metrics(series, truth) -> dict:
     return res
 
 
-def plots(series, truth, outdir: Path) -> List[str]:
+def sd_series(series, pattern: str) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """(times, sd) of the first output signal whose name matches `pattern`
+    (case-insensitive), in whichever estimator frame carries it; None when
+    no frame does or it never holds a positive sd (not yet published)."""
+    rx = re.compile(pattern, re.I)
+    for rows in series.values():
+        if not rows:
+            continue
+        sig = next((k for k in rows[0][1] if rx.fullmatch(k)), None)
+        if sig is None:
+            continue
+        t = np.array([r[0] for r in rows])
+        sd = np.array([float(r[1][sig]) for r in rows])
+        ok = np.isfinite(sd) & (sd > 0)
+        if ok.any():
+            return t[ok], sd[ok]
+    return None
+
+
+SD_SIGNALS = {  # signal-name patterns of the published standard deviations
+    "position": r"(est)?pos(ition)?_?sd(_?m)?", "speed": r"(est)?(speed|spd)_?sd(_?mps)?",
+    "c0": r"(est)?c0_?sd", "c1": r"(est)?c1_?sd", "c2": r"(est)?c2_?sd",
+}
+
+
+def run_title(truth) -> str:
+    """The run's identity for plot titles: true type, seed, noise (profile)."""
+    i = truth.get("identity", {})
+    parts = [f"truth {i.get('type', truth['theta'].name)}"]
+    parts += [f"{k} {i[k]}" for k in ("seed", "noise", "profile") if k in i]
+    return ", ".join(parts)
+
+
+def _mark_decision(ax, decision: Optional[float], declared: Optional[str], label: bool = True) -> None:
+    if decision is not None:
+        ax.axvline(decision, color="tab:red", ls=":", lw=1.2,
+                   label=f"declared {declared} at {decision:.0f} s" if label else None)
+
+
+def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Optional[float] = None,
+          declared: Optional[str] = None) -> List[str]:
+    """PNGs of the run: states (with 95 % bands when the estimator publishes
+    sd), model weights with the declaration threshold of `rule`
+    (runconfig.declaration), Davis coefficients and W(v). The decision time
+    is marked on every time axis; titles name the run."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -147,18 +197,30 @@ def plots(series, truth, outdir: Path) -> List[str]:
     files = []
     th_true: Theta = truth["theta"]
     tt = truth["time_s"]
+    who = run_title(truth)
+    rule = rule or {}
     st = [(t, s) for t, s in series[EST_STATE] if s["EstValid"] >= 0.5]
     if st:
         t = np.array([x[0] for x in st])
         fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8)
-        ax[0].set_ylabel("position error (m)")
+        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8,
+                   label="estimate - truth")
         ax[1].plot(tt, truth["speed_mps"] * 3.6, label="true", lw=1.2)
-        ax[1].plot(t, np.array([x[1]["EstSpeed"] for x in st]) * 3.6, label="estimate", lw=0.8)
+        v_est = np.array([x[1]["EstSpeed"] for x in st]) * 3.6
+        ax[1].plot(t, v_est, label="estimate", lw=0.8)
+        for a, key, centre, scale in ((ax[0], "position", np.zeros_like(t), 1.0), (ax[1], "speed", v_est, 3.6)):
+            sd = sd_series(series, SD_SIGNALS[key])
+            if sd is not None:
+                band = Z95 * scale * np.interp(t, *sd)
+                a.fill_between(t, centre - band, centre + band, color="tab:blue", alpha=0.2, lw=0,
+                               label="95 % band of the estimate")
+        for a in ax:
+            _mark_decision(a, decision, declared)
+            a.legend(fontsize=8)
+        ax[0].set_ylabel("position error (m)")
         ax[1].set_ylabel("speed (km/h)")
         ax[1].set_xlabel("time (s)")
-        ax[1].legend()
-        fig.suptitle("State estimate vs truth")
+        fig.suptitle(f"State estimate vs truth ({who})")
         files.append(_save(fig, outdir / "states.png"))
     if series[EST_TYPE]:
         t = np.array([x[0] for x in series[EST_TYPE]])
@@ -168,12 +230,16 @@ def plots(series, truth, outdir: Path) -> List[str]:
         for idx in sorted(set(lead.tolist())):
             sel = lead == idx
             ax.plot(t[sel], lw[sel], ".", ms=3, label=f"leader {type_name(idx)}")
-        ax.axhline(0.9, color="grey", ls="--", lw=0.8)
+        if rule.get("threshold") is not None:
+            hold = f", held {rule['hold_s']:g} s" if rule.get("hold_s") is not None else ""
+            ax.axhline(rule["threshold"], color="grey", ls="--", lw=0.8,
+                       label=f"declaration: q > {rule['threshold']:g}{hold} ({rule.get('source', '?')})")
+        _mark_decision(ax, decision, declared)
         ax.set_ylim(0, 1.05)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("model weight q")
-        ax.set_title(f"Leading model weight (truth {th_true.name})")
-        ax.legend()
+        ax.set_title(f"Leading model weight ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "weights.png"))
     thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
     if thf:
@@ -181,21 +247,31 @@ def plots(series, truth, outdir: Path) -> List[str]:
         fig, ax = plt.subplots(figsize=(9, 4))
         for k, c in (("C0", th_true.c0), ("C1", th_true.c1), ("C2", th_true.c2)):
             ax.plot(t, 100 * (np.array([x[1][k] for x in thf]) - c) / c, label=k.lower())
-        ax.axhspan(-5, 5, color="green", alpha=0.1)
+        ax.axhspan(-5, 5, color="green", alpha=0.1, label="+-5 %")
+        _mark_decision(ax, decision, declared)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("relative error (%)")
-        ax.set_title("Estimated Davis coefficients")
-        ax.legend()
+        ax.set_title(f"Estimated Davis coefficients ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "theta.png"))
         s = thf[-1][1]
         est = Theta("estimate", s["C0"], s["C1"], s["C2"])
         fig, ax = plt.subplots(figsize=(7, 4))
-        ax.plot(V_GRID_KMH, th_true.resistance(V_GRID_KMH / 3.6), label=f"true ({th_true.name})")
-        ax.plot(V_GRID_KMH, est.resistance(V_GRID_KMH / 3.6), "--", label="estimate (final)")
+        vk = V_GRID_KMH
+        ax.plot(vk, th_true.resistance(vk / 3.6), label=f"true ({th_true.name})")
+        w_est = est.resistance(vk / 3.6)
+        ax.plot(vk, w_est, "--", label="estimate (final)")
+        sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
+        if all(x is not None for x in sds):
+            # final sd of each coefficient; their covariances are not published, so this band treats
+            # them as independent: var W = sum_k (V^k sd_k)^2
+            band = Z95 * np.sqrt(sum((vk ** k * x[1][-1]) ** 2 for k, x in enumerate(sds)))
+            ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
+                            label="95 % band (coefficients independent)")
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel("W (N/kN)")
-        ax.set_title("Running resistance")
-        ax.legend()
+        ax.set_title(f"Running resistance ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "resistance.png"))
     return files
 
@@ -223,6 +299,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
     cli.add_json_argument(p, what="the metrics as JSON (compact; with '-' the table goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
+    p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
+                   "are drawn on the weights plot (default: the library's defaults)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     return p
 
@@ -267,7 +345,9 @@ def _main(argv) -> int:
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
         try:
-            res["plots"] = plots(series, truth, Path(a.plots))
+            rule = runconfig.declaration(a.config)
+            res["plots"] = plots(series, truth, Path(a.plots), rule, res.get("decision_time_s"),
+                                 res.get("declared_type"))
         except OSError as exc:
             raise cli.output_error(a.plots, exc) from exc
     table = sys.stderr if a.json == "-" else sys.stdout  # '--json -': nothing but JSON on stdout
