@@ -303,3 +303,18 @@ def test_score_without_estimator_frames_is_no_traffic(files, capsys):
     out = capsys.readouterr()
     assert json.loads(out.out)["frames"]["EstState"] == 0
     assert out.err.splitlines()[-1] == f"hstpf-score: no estimator frame in {files / 'run.log'}"
+
+
+def test_closed_stdout_pipe_ends_quietly(tmp_path):
+    """`hstpf-replay LOG --no-bus -o - | head -1`: no traceback, no error, exit 0.
+    The log (about 400 kB) is larger than a pipe's buffer, so the pipe breaks."""
+    src, n = long_log(tmp_path, 1000.0)
+    assert src.stat().st_size > 4 * 65536
+    code = "import sys; from hstpf_tools import replay; sys.exit(replay.main())"
+    p = subprocess.Popen([sys.executable, "-c", code, str(src), "--no-bus", "-o", "-"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    first = p.stdout.readline()
+    p.stdout.close()
+    err = p.stderr.read()
+    assert p.wait(60) == 0 and first.startswith(b"(0.000000) vcan0 100#")  # (no report: stdout is gone)
+    assert err == b""

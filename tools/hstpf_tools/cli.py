@@ -17,6 +17,7 @@ import argparse
 import contextlib
 import io
 import json
+import os
 import signal
 import sys
 import threading
@@ -112,6 +113,10 @@ def run(prog: str, body: Callable[..., int], *args, **kwargs) -> int:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 128 + signal.SIGINT
     except BrokenPipeError:  # stdout closed early (| head): nothing left to say
+        try:  # and nothing to flush at exit either
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+            pass
         return 0
 
 
@@ -162,7 +167,11 @@ def input_error(path: str, exc: BaseException) -> CliError:
     return CliError(EXIT_INPUT, f"cannot read {path}: {why}")
 
 
-def output_error(path: str, exc: BaseException) -> CliError:
+def output_error(path: str, exc: BaseException) -> BaseException:
+    """CliError(6) naming the file; a closed stdout pipe (| head) stays
+    BrokenPipeError, which run() ends quietly."""
+    if isinstance(exc, BrokenPipeError):
+        return exc
     why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
     return CliError(EXIT_OUTPUT, f"cannot write {path}: {why}")
 
