@@ -38,7 +38,8 @@ def log_file(tmp_path):
     c = FrameCodec()
     msgs = []
     for k in range(20):
-        for name, v in (("Position", {"PosValid": 1, "Position": 10.0 * k}), ("Traction", {"TractValid": 1, "TractForce": 50.0})):
+        for name, v in (("Position", {"PosValid": 1, "Position": 10.0 * k}),
+                        ("Traction", {"TractValid": 1, "TractForce": 50.0})):
             fid, d = c.encode(name, v)
             msgs.append(message(100.0 + 0.1 * k, fid, d))
     path = tmp_path / "in.log"

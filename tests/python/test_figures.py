@@ -66,7 +66,8 @@ def test_figures_name_the_run_mark_the_declaration_and_draw_bands(tmp_path, figu
     cfg.write_text("declare_threshold = 0.95\ndeclare_hold_s = 45\n")
     j1 = mc_json(tmp_path / "p1.json", "paper1", "CRH3", 1)
     j2 = mc_json(tmp_path / "p2.json", "paper2", "CRH3", 7)
-    assert mf.main(["--trace1", str(trace(tmp_path / "t1.csv", True)), "--trace2", str(trace(tmp_path / "t2.csv", False)),
+    assert mf.main(["--trace1", str(trace(tmp_path / "t1.csv", True)),
+                    "--trace2", str(trace(tmp_path / "t2.csv", False)),
                     "--json", str(j1), str(j2), "--config", str(cfg), "--out", str(tmp_path / "img")]) == 0
     assert len(figures) == 9
     w1 = figures["case1_fig1_weights.png"].axes[0]

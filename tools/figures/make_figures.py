@@ -226,7 +226,8 @@ def _main(argv):
                     formatter_class=__import__("argparse").RawDescriptionHelpFormatter)
     ap.add_argument("--trace1", required=True, help="hstpf-mc --scenario paper1 --trace CSV")
     ap.add_argument("--trace2", required=True, help="hstpf-mc --scenario paper2 --trace CSV")
-    ap.add_argument("--json", nargs="*", default=[], help="hstpf-mc --json outputs (paper1/paper2 name the traced runs)")
+    ap.add_argument("--json", nargs="*", default=[],
+                    help="hstpf-mc --json outputs (paper1/paper2 name the traced runs)")
     ap.add_argument("--config", help="hstpfd config file whose declare_threshold / declare_hold_s the runs used "
                     "(default: the library's defaults, as hstpf-mc uses them)")
     ap.add_argument("--out", required=True)

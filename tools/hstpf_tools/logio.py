@@ -1,5 +1,5 @@
 """candump logs through python-can's readers and writers."""
-from typing import Iterable, List, Tuple
+from typing import Iterable, List
 
 import can
 

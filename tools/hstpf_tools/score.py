@@ -26,7 +26,6 @@ import numpy as np
 from . import cli, e2e, runconfig
 from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
                      type_name)
-from .logio import read_log
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
