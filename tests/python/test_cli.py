@@ -318,3 +318,11 @@ def test_closed_stdout_pipe_ends_quietly(tmp_path):
     err = p.stderr.read()
     assert p.wait(60) == 0 and first.startswith(b"(0.000000) vcan0 100#")  # (no report: stdout is gone)
     assert err == b""
+
+
+def test_log_suffix_python_can_cannot_write_is_exit_6(files, capsys):
+    assert replay.main([str(files / "run.log"), "--no-bus", "-o", str(files / "x.nosuchformat")]) == cli.EXIT_OUTPUT
+    one_line(capsys.readouterr().err, "hstpf-replay", "x.nosuchformat", "unknown log format")
+    assert record.main(["-i", "virtual", "-c", "hstpf-sfx", "--duration", "0.05", "-o",
+                        str(files / "r.nosuchformat")]) == cli.EXIT_OUTPUT
+    one_line(capsys.readouterr().err, "hstpf-record", "r.nosuchformat")

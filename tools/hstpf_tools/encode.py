@@ -88,7 +88,7 @@ def _main(argv) -> int:
         if a.out != "-":
             Path(a.out).parent.mkdir(parents=True, exist_ok=True)
         n = write_log(a.out, msgs, a.channel)
-    except OSError as exc:
+    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
         raise cli.output_error(a.out, exc) from exc
     cli.emit_report({"log": a.out, "rows": len(rows), "frames": n}, a.json, stdout_taken=a.out == "-")
     return cli.EXIT_OK

@@ -249,7 +249,7 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
     if a.out:
         try:
             write_log(a.out, msgs)
-        except OSError as exc:
+        except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
             raise cli.output_error(a.out, exc) from exc
     code, failure = cli.EXIT_OK, None
     if use_bus:

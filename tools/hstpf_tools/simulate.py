@@ -108,7 +108,7 @@ def _main(argv) -> int:
         if a.out != "-":
             Path(a.out).parent.mkdir(parents=True, exist_ok=True)
         n = write_log(a.out, msgs, a.channel)
-    except OSError as exc:
+    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
         raise cli.output_error(a.out, exc) from exc
     truth = a.truth or str(Path(a.out).with_name(Path(a.out).stem + "_truth.csv"))
     noise = a.noise + "".join(f" {k}={v}" for k, v in (("ws", a.ws), ("wv", a.wv), ("e", a.e_noise)) if v)
