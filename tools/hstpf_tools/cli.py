@@ -203,9 +203,10 @@ def write_text(path: str, text: str) -> None:
 # ---- reports ----------------------------------------------------------------
 
 
-def add_json_argument(p: argparse.ArgumentParser, *aliases: str, what: str = "the JSON report") -> None:
+def add_json_argument(p: argparse.ArgumentParser, *aliases: str, what: str = "the JSON report",
+                      default: str = "") -> None:
     p.add_argument("--json", *aliases, dest="json", metavar="FILE",
-                   help=f"write {what} here, '-' for stdout (compact JSON, nothing else on stdout)")
+                   help=f"write {what} to FILE; '-': stdout, one compact JSON line and nothing else{default}")
 
 
 def dumps(obj: Any) -> str:

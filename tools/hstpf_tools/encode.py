@@ -28,7 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--t0", type=float, default=0.0, help="added to time_s for the log timestamps (0)")
     p.add_argument("--channel", default="vcan0")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
-    cli.add_json_argument(p, what="the JSON report (default: stdout, or stderr when -o is '-')")
+    cli.add_json_argument(p, default=" (default: stdout, or stderr when -o is '-')")
     return p
 
 

@@ -99,7 +99,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="give up if no frame comes in this time, s (60)")
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
     p.add_argument("--ids", type=_ids, help="only these IDs, e.g. 0x200,0x210 (error frames are always kept)")
-    cli.add_json_argument(p, what="the JSON report (default: stdout, or stderr when -o is '-')")
+    cli.add_json_argument(p, default=" (default: stdout, or stderr when -o is '-')")
     cli.add_progress_argument(p)
     return p
 

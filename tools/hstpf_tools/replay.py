@@ -227,7 +227,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--silence-len", type=float, default=2.0, help="length of a random silence, s (2)")
     p.add_argument("--delay-s", type=float, default=0.25, help="delay of a delayed frame, s (0.25)")
     p.add_argument("--unknown-id", type=lambda s: int(s, 0), default=0x7F0, help="ID of injected unknown frames (0x7F0)")
-    cli.add_json_argument(p, "--report", what="the JSON report (default: stdout, or stderr when -o is '-')")
+    cli.add_json_argument(p, "--report", default=" (default: stdout, or stderr when -o is '-')")
     cli.add_progress_argument(p)
     return p
 

@@ -296,7 +296,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
     p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
-    cli.add_json_argument(p, what="the metrics as JSON (compact; with '-' the table goes to stderr)")
+    cli.add_json_argument(p, what="the metrics as JSON", default=" (the table then goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
     p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
                    "are drawn on the weights plot (default: the library's defaults)")

@@ -43,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     p.add_argument("-o", "--out", default="run.log", help="candump log to write (run.log); '-': stdout")
     p.add_argument("--truth", help="truth CSV (default: <out stem>_truth.csv; needed with -o -); '-': stdout")
-    cli.add_json_argument(p, what="the JSON report (default: stdout, or stderr when -o or --truth is '-')")
+    cli.add_json_argument(p, default=" (default: stdout, or stderr when -o or --truth is '-')")
     return p
 
 
