@@ -326,3 +326,13 @@ def test_log_suffix_python_can_cannot_write_is_exit_6(files, capsys):
     assert record.main(["-i", "virtual", "-c", "hstpf-sfx", "--duration", "0.05", "-o",
                         str(files / "r.nosuchformat")]) == cli.EXIT_OUTPUT
     one_line(capsys.readouterr().err, "hstpf-record", "r.nosuchformat")
+
+
+def test_exit_codes_are_documented():
+    """docs/tools.md's exit-code table has exactly the codes of hstpf_tools.cli."""
+    text = (ROOT / "docs" / "tools.md").read_text()
+    table = text.split("| Exit | Meaning |", 1)[1].split("\n\n", 1)[0]
+    documented = set()
+    for cell in re.findall(r"^\| ([\d, ]+) \|", table, re.M):
+        documented |= {int(x) for x in cell.split(",")}
+    assert documented == set(cli.EXIT_CODES) | {128 + signal.SIGINT, 128 + signal.SIGTERM}
