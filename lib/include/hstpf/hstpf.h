@@ -1,9 +1,16 @@
 /**
  * @file hstpf.h
  * @brief hstpf: online state, running-resistance and train-type estimation
- * for a high-speed train, by a bank of particle filters with Bayesian model
+ * for a high-speed train, by a bank of per-type filters with Bayesian model
  * weights (Xie et al., "An Online State and Parameter Estimation of Dynamic
- * State Space Model of High Speed Train"). See docs/model.md.
+ * State Space Model of High Speed Train"). Each model's filter is one of the
+ * engines of hstpf_engine_t: an extended Kalman filter (exact likelihood for
+ * Gaussian noise) or a particle filter (any noise). See docs/model.md.
+ *
+ * Sources (lib/src): bank.c (life cycle, step, model weights, declaration,
+ * blend), engine.h (the interface every engine implements),
+ * engine_kalman.c, engine_particle.c, config.c (defaults and the one table
+ * of ranges), track.c (gradient and curve profile), dist.c, rng.c.
  *
  * Model, per step of length T seconds (units: docs/model.md):
  *   s' = s + T v + w_s
@@ -330,7 +337,7 @@ typedef struct {
     uint32_t outliers, reacquired;
     uint16_t outlier_run;            /* consecutive gated measurements */
     uint8_t have_fix;
-    uint8_t kalman;                  /* the engine resolved at init */
+    uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
 } hstpf_t;
 
 /**
