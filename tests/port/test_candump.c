@@ -1,8 +1,10 @@
 /* cmocka tests: candump log line parser and writer. */
+#define _POSIX_C_SOURCE 200809L /* popen: the daemon run in test_sniff */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <cmocka.h>
@@ -110,6 +112,8 @@ static void test_format_roundtrip(void **state)
         "(0.500000) can0 000#\n",
         "(5.000000) vcan0 20000040#0000000000000000\n",
         "(5.000000) vcan0 7FF#R\n",
+        "(5.000000) vcan0 7FF#R4\n", /* the requested length survives */
+        "(5.000000) vcan0 1ABCDEF0#R8\n",
     };
     char buf[256];
     size_t i;
@@ -125,6 +129,80 @@ static void test_format_roundtrip(void **state)
         hstpfd_frame_t f;
         assert_int_equal(hstpfd_candump_parse(lines[0], &f, NULL, 0), HSTPFD_CANDUMP_OK);
         assert_int_equal(hstpfd_candump_format(&f, "vcan0", buf, 20), -1);
+        f.flags = HSTPFD_FRAME_RTR; /* no RTR frame asks for more than 8 bytes */
+        f.len = 9;
+        assert_int_equal(hstpfd_candump_format(&f, "vcan0", buf, sizeof buf), -1);
+    }
+}
+
+/* Logs in other formats are refused with a hint, candump text passes. */
+static void test_sniff(void **state)
+{
+    static const struct {
+        const char *head;
+        size_t n; /* 0: strlen */
+        const char *format;
+    } other[] = {
+        {"date Mon Nov 23 01:00:00.000 am 2026\nbase hex  timestamps absolute\n"
+         "   0.010000 1  123             Rx   d 8 00 11 22 33 44 55 66 77\n", 0, "Vector ASC"},
+        {"LOGG\x90\0\0\0\x01\x02", 10, "Vector BLF"},
+        {";$FILEVERSION=1.1\n;$STARTTIME=45000.1\n;\n"
+         "     1)         0.1  Rx         0123  8  00 11 22 33 44 55 66 77\n", 0, "PEAK TRC"},
+        {"timestamp,arbitration_id,extended,remote,error,dlc,data\n1.0,291,0,0,0,1,AA\n", 0,
+         "python-can CSV"},
+        {"MDF     4.10    ", 16, "ASAM MF4"},
+        {"\x7f" "ELF\x02\x01\x01\0\0\0", 10, "binary"},
+        {"hello\nworld\n", 0, "unknown"},
+    };
+    char msg[512];
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof other / sizeof other[0]; ++i) {
+        const size_t n = other[i].n ? other[i].n : strlen(other[i].head);
+        msg[0] = '\0';
+        assert_int_equal(hstpfd_candump_sniff(other[i].head, n, "x.log", msg, sizeof msg), -1);
+        assert_non_null(strstr(msg, "python -m can.logconvert"));
+        assert_non_null(strstr(msg, other[i].format));
+        assert_non_null(strstr(msg, "x.log"));
+        assert_null(strchr(msg, '\n')); /* one line */
+    }
+    /* candump text, also after comments and a bad first line; empty files */
+    {
+        static const char *const ok[] = {"# c\n(1.0) vcan0 123#00\n", "garbage\n(1.0) vcan0 123#00", "",
+                                         "; only a comment\n\n"};
+        for (i = 0; i < sizeof ok / sizeof ok[0]; ++i) {
+            assert_int_equal(hstpfd_candump_sniff(ok[i], strlen(ok[i]), "x", msg, sizeof msg), 0);
+        }
+    }
+    /* files: stdin and unopenable files are left to the log source */
+    assert_int_equal(hstpfd_candump_check_file("-", msg, sizeof msg), 0);
+    assert_int_equal(hstpfd_candump_check_file("/nonexistent/x.asc", msg, sizeof msg), 0);
+    {
+        const char *path = HSTPFD_TEST_DIR "/test_candump.asc";
+        FILE *fp = fopen(path, "wb");
+        assert_non_null(fp);
+        fputs(other[0].head, fp);
+        fclose(fp);
+        assert_int_equal(hstpfd_candump_check_file(path, msg, sizeof msg), -1);
+        assert_non_null(strstr(msg, "Vector ASC"));
+#ifdef HSTPFD_BIN
+        { /* the daemon: non-zero exit, one line on stderr naming the converter */
+            char cmd[1024], out[1024];
+            FILE *pp;
+            size_t got;
+            int st;
+            (void)snprintf(cmd, sizeof cmd, "'%s' --log '%s' 2>&1", HSTPFD_BIN, path);
+            pp = popen(cmd, "r");
+            assert_non_null(pp);
+            got = fread(out, 1, sizeof out - 1, pp);
+            out[got] = '\0';
+            st = pclose(pp);
+            assert_true(st != 0);
+            assert_non_null(strstr(out, "python -m can.logconvert"));
+            assert_ptr_equal(strchr(out, '\n'), out + got - 1);
+        }
+#endif
+        remove(path);
     }
 }
 
@@ -136,6 +214,7 @@ int main(void)
         cmocka_unit_test(test_fd_rtr_err),
         cmocka_unit_test(test_skip_and_bad),
         cmocka_unit_test(test_format_roundtrip),
+        cmocka_unit_test(test_sniff),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -256,13 +256,78 @@ static void test_example_files(void **state)
     assert_int_equal(cfg.out_format, HSTPFD_OUT_CSV);
 }
 
+/* --print-config output read back gives the same configuration and the same
+ * text again, also for values a config line would otherwise take for a
+ * comment ('#', ';' after a blank) or a quote. */
+static void roundtrip(const hstpfd_config_t *c)
+{
+    static char a[16384], b[16384];
+    assert_true(hstpfd_config_write(c, a, sizeof a) > 0);
+    hstpfd_config_default(&cfg2);
+    if (hstpfd_config_text(&cfg2, a, err, sizeof err) != 0) {
+        fail_msg("%s in\n%s", err, a);
+    }
+    assert_true(hstpfd_config_write(&cfg2, b, sizeof b) > 0);
+    assert_string_equal(a, b);
+}
+
+static void test_write_quoting(void **state)
+{
+    char name[64];
+    int i;
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "#run.log", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "out", ";x", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "summary", "a #b ;c", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "frames_out", "\"q\\\" x", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "iface", "#0", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "#m:1:0.01:0.0001, CRH3", err, sizeof err), 0);
+    roundtrip(&cfg);
+    assert_string_equal(cfg2.log, "#run.log");
+    assert_string_equal(cfg2.out, ";x");
+    assert_string_equal(cfg2.summary, "a #b ;c");
+    assert_string_equal(cfg2.frames_out, "\"q\\\" x");
+    assert_string_equal(cfg2.iface, "#0");
+    assert_string_equal(cfg2.models[0].name, "#m");
+
+    /* the quoted form by hand, with a comment after it */
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"#a \\\"b\\\\\"  # note", err, sizeof err), 0);
+    assert_string_equal(cfg.log, "#a \"b\\");
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"open", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"a\" b", err, sizeof err), -1);
+    /* a newline or other control character cannot be written back: refused */
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "a\nb", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "a\x01:1:0:0", err, sizeof err), -1);
+
+    /* the longest model list: 17 custom rows with long names and long numbers */
+    hstpfd_config_default(&cfg);
+    {
+        char list[2048];
+        size_t pos = 0;
+        for (i = 0; i < HSTPF_MAX_MODELS; ++i) {
+            (void)snprintf(name, sizeof name, "#%02d%s", i, "_aaaaaaaaaaaaaaaaaaaaaaaaaaa");
+            pos += (size_t)snprintf(list + pos, sizeof list - pos, "%s%s:1.2345678901234567:0.12345678901234567:"
+                                    "0.0012345678901234567", i ? "," : "", name);
+        }
+        assert_true(pos < sizeof list);
+        if (hstpfd_config_set(&cfg, "models", list, err, sizeof err) != 0) {
+            fail_msg("%s", err);
+        }
+    }
+    assert_int_equal(cfg.n_models, HSTPF_MAX_MODELS);
+    roundtrip(&cfg);
+    assert_int_equal(cfg2.n_models, HSTPF_MAX_MODELS);
+    assert_float_equal(cfg2.models[16].c2, cfg.models[16].c2, 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),   cmocka_unit_test(test_set_numbers), cmocka_unit_test(test_enums),
         cmocka_unit_test(test_noise),      cmocka_unit_test(test_models),      cmocka_unit_test(test_lines),
         cmocka_unit_test(test_file_and_write), cmocka_unit_test(test_finish),
-        cmocka_unit_test(test_example_files),
+        cmocka_unit_test(test_example_files), cmocka_unit_test(test_write_quoting),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
