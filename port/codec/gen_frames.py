@@ -71,6 +71,13 @@ def main():
         h.append(f"#define HSTPF_FRAME_{up}_DATA_ID 0x{m.dbc.attributes['HstpfE2EDataId'].value:04X}u\n")
         h.append(f"#define HSTPF_FRAME_{up}_LENGTH {m.length}u\n")
         h.append(f"#define HSTPF_FRAME_{up}_CYCLE_MS {m.cycle_time or 0}u\n\n")
+    fix = db.get_message_by_name("Position").get_signal_by_name("FixTime")
+    if fix.is_signed or fix.scale != 1 or fix.offset != 0 or fix.maximum != (1 << fix.length) - 1:
+        raise SystemExit("Position.FixTime must be an unsigned 1 ms counter over its whole bit width")
+    h.append(
+        "/** Position.FixTime wraps at this many ms: differences are taken modulo it. */\n"
+        f"#define HSTPF_FIX_TIME_WRAP_MS {1 << fix.length}u\n\n"
+    )
     h.append(
         "/** One frame of the DBC. */\ntypedef struct {\n"
         "    uint32_t can_id;   /**< 11-bit identifier */\n"

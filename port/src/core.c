@@ -448,10 +448,16 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
     now_ms = (uint32_t)(c->t_now / 1000);
     hstpfd_rx_decode(&c->rx, f, now_ms, &r);
     switch (r.kind) {
-    case HSTPFD_RX_POSITION:
+    case HSTPFD_RX_POSITION: {
+        /* consecutive fixes of one unbroken E2E sequence: their fix times differ by less than the wrap */
+        const int in_seq = c->pos_prev_fix && (r.e2e == HSTPF_E2E_OK || r.e2e == HSTPF_E2E_OK_LOST);
         ++c->n.position;
+        if (r.accepted || r.e2e == HSTPF_E2E_COUNTER_JUMP) {
+            c->pos_prev_fix = r.valid;
+        }
         if (r.valid) {
-            hstpfd_sched_position(&c->sched, c->t_now, r.value);
+            hstpfd_sched_position_at(&c->sched, c->t_now, r.value,
+                                     r.has_fix_time ? (int32_t)r.fix_time_ms : HSTPFD_NO_FIX_TIME, in_seq);
         } else {
             if (r.accepted) {
                 ++c->n.pos_invalid;
@@ -459,6 +465,7 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
             hstpfd_sched_time(&c->sched, c->t_now);
         }
         break;
+    }
     case HSTPFD_RX_TRACTION:
         ++c->n.traction;
         if (r.valid && fabs(hstpfd_traction_unit(r.value, c->cfg->mass_t)) > HSTPF_U_MAX) {
@@ -639,6 +646,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     fputs("},\"scheduler\":{", fp);
     kv(fp, "decimated", (unsigned long)s->decimated, 1);
     kv(fp, "split", (unsigned long)s->split, 0);
+    kv(fp, "fix_dated", (unsigned long)s->fix_dated, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);
     fputs("},\"io\":{", fp);

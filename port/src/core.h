@@ -52,6 +52,7 @@ typedef struct {
     /* estimate */
     hstpf_estimate_t est;
     uint8_t have_fix;      /* the estimator has a fix now */
+    uint8_t pos_prev_fix;  /* the last position frame in sequence was a valid fix */
     uint8_t had_fix;       /* t_first_fix is set */
     uint8_t have_decision; /* decision_t is set */
     int64_t t_first_fix;

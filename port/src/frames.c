@@ -7,6 +7,10 @@
 #include "hstpf_can.h"
 #include "hstpf_frames.h"
 
+#if HSTPF_FIX_TIME_WRAP_MS != HSTPFD_FIX_WRAP_MS
+#error "frames.h: HSTPFD_FIX_WRAP_MS differs from the DBC's FixTime width"
+#endif
+
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms)
 {
     hstpf_e2e_rx_config_t c;
@@ -54,6 +58,8 @@ void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t n
         if (out->accepted && hstpf_can_position_unpack(&m, f->data, f->len) == 0) {
             out->value = hstpf_can_position_position_decode(m.position);
             out->valid = (uint8_t)(m.pos_valid == HSTPF_CAN_POSITION_POS_VALID_VALID_CHOICE);
+            out->has_fix_time = (uint8_t)(m.fix_time_valid == HSTPF_CAN_POSITION_FIX_TIME_VALID_PRESENT_CHOICE);
+            out->fix_time_ms = (uint16_t)(m.fix_time % HSTPF_FIX_TIME_WRAP_MS);
         }
         return;
     }

@@ -28,7 +28,12 @@ typedef struct {
     uint8_t accepted;       /* inputs: E2E accepted */
     uint8_t valid;          /* inputs: accepted and the sender's valid flag set */
     double value;           /* position m, or total traction force kN */
+    uint8_t has_fix_time;   /* position: the sender dated the fix (FixTimeValid) */
+    uint16_t fix_time_ms;   /* position: fix time, ms modulo HSTPFD_FIX_WRAP_MS */
 } hstpfd_rx_t;
+
+/* The position frame's fix time wraps at this many ms. */
+#define HSTPFD_FIX_WRAP_MS 8192
 
 /* Receiver state: one E2E checker per input stream. */
 typedef struct {

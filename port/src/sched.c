@@ -183,14 +183,61 @@ void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn)
     s->trac_stale = 0;
 }
 
+#define FIX_WRAP_US ((int64_t)HSTPFD_SCHED_FIX_WRAP_MS * 1000)
+
+/* floor(a / b), b > 0 */
+static int64_t floor_div(int64_t a, int64_t b)
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/* Timeline time of a fix received at t_rx (see the rules in sched.h). */
+static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_sequence)
+{
+    if (!s->have_fix) {
+        s->have_fix = 1;
+        s->fix_u = (int64_t)fix_ms * 1000;
+        s->fix_off = t_rx - s->fix_u;
+    } else {
+        int64_t d = (int64_t)((fix_ms - s->fix_ms_last + HSTPFD_SCHED_FIX_WRAP_MS) % HSTPFD_SCHED_FIX_WRAP_MS) * 1000;
+        int64_t off;
+        if (in_sequence) {
+            if (d > FIX_WRAP_US / 2) {
+                d -= FIX_WRAP_US; /* older than the last fix */
+            }
+        } else {
+            d += floor_div(t_rx - s->fix_rx - d + FIX_WRAP_US / 2, FIX_WRAP_US) * FIX_WRAP_US;
+        }
+        s->fix_u += d;
+        /* least latency seen; creeps up by 100 ppm so a drifting clock is followed */
+        off = s->fix_off + (t_rx - s->fix_rx) / 10000;
+        if (t_rx - s->fix_u < off) {
+            off = t_rx - s->fix_u;
+        }
+        s->fix_off = off;
+    }
+    s->fix_ms_last = fix_ms;
+    s->fix_rx = t_rx;
+    ++s->n.fix_dated;
+    return s->fix_u + s->fix_off;
+}
+
 void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m)
+{
+    hstpfd_sched_position_at(s, t_us, position_m, HSTPFD_NO_FIX_TIME, 0);
+}
+
+void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m, int32_t fix_ms, int in_sequence)
 {
     int64_t gap;
     const int had_step = s->have_step;
     advance(s, t_us);
-    t_us = s->t_now;
     s->have_pos = 1;
-    s->t_pos = t_us;
+    s->t_pos = s->t_now; /* staleness runs on the receive clock */
+    t_us = s->t_now;
+    if (fix_ms >= 0 && fix_ms < HSTPFD_SCHED_FIX_WRAP_MS) {
+        t_us = fix_time(s, s->t_now, fix_ms, in_sequence);
+    }
     if (!had_step) {
         /* the first step has length first_dt_s and the traction held now */
         s->pos_stale = 0;

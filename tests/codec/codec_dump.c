@@ -46,22 +46,29 @@ static void head(const char *name, uint32_t id, const uint8_t *f)
     printf("\",");
 }
 
-static void position(double valid, double quality, double pos)
+static void position(double valid, double quality, double pos, double fix_valid, double fix_ms)
 {
     struct hstpf_can_position_t m;
     uint8_t f[8];
     hstpf_can_position_init(&m);
     m.pos_valid = hstpf_frames_position_pos_valid_raw(valid);
     m.pos_quality = hstpf_frames_position_pos_quality_raw(quality);
+    m.fix_time_valid = hstpf_frames_position_fix_time_valid_raw(fix_valid);
     m.position = hstpf_frames_position_position_raw(pos);
+    m.fix_time = hstpf_frames_position_fix_time_raw(fix_ms);
     hstpf_can_position_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_POSITION_ID), f, 8);
     hstpf_can_position_unpack(&m, f, 8);
     head("Position", HSTPF_FRAME_POSITION_ID, f);
-    printf("\"in\":{\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g},", valid, quality, pos);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g}}\n",
+    printf("\"in\":{\"PosValid\":%.17g,\"PosQuality\":%.17g,\"FixTimeValid\":%.17g,\"Position\":%.17g,"
+           "\"FixTime\":%.17g},",
+           valid, quality, fix_valid, pos, fix_ms);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%.17g,\"PosQuality\":%.17g,"
+           "\"FixTimeValid\":%.17g,\"Position\":%.17g,\"FixTime\":%.17g}}\n",
            m.e2e_crc, m.e2e_counter, hstpf_can_position_pos_valid_decode(m.pos_valid),
-           hstpf_can_position_pos_quality_decode(m.pos_quality), hstpf_can_position_position_decode(m.position));
+           hstpf_can_position_pos_quality_decode(m.pos_quality),
+           hstpf_can_position_fix_time_valid_decode(m.fix_time_valid), hstpf_can_position_position_decode(m.position),
+           hstpf_can_position_fix_time_decode(m.fix_time));
 }
 
 static void traction(double valid, double force)
@@ -200,11 +207,11 @@ static void encode_set(void)
     }
     /* 17 position frames: the counter wraps 14 -> 0 on the way. */
     for (k = 0; k < 17; k++) {
-        position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k);
+        position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k, k % 7 != 2, (double)((k * 997) % 8192));
     }
-    position(1, 3, -2.718);      /* a noisy fix near the origin */
-    position(1, 3, 100000000.0); /* the largest position */
-    position(1, 3, -100000000.0);
+    position(1, 3, -2.718, 1, 0.0);       /* a noisy fix near the origin */
+    position(1, 3, 100000000.0, 1, 8191.0); /* the largest position, the last fix time before the wrap */
+    position(1, 3, -100000000.0, 0, 0.0);
     traction(1, 0.0);
     traction(1, 187.33);
     traction(1, -412.07);
@@ -283,8 +290,10 @@ static int decode_line(const char *line)
     case HSTPF_FRAME_POSITION_ID: {
         struct hstpf_can_position_t m;
         hstpf_can_position_unpack(&m, f, n);
-        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%u,\"PosQuality\":%u,\"Position\":%.17g", m.e2e_crc,
-               m.e2e_counter, m.pos_valid, m.pos_quality, hstpf_can_position_position_decode(m.position));
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%u,\"PosQuality\":%u,\"FixTimeValid\":%u,"
+               "\"Position\":%.17g,\"FixTime\":%u",
+               m.e2e_crc, m.e2e_counter, m.pos_valid, m.pos_quality, m.fix_time_valid,
+               hstpf_can_position_position_decode(m.position), m.fix_time);
         break;
     }
     case HSTPF_FRAME_TRACTION_ID: {

@@ -25,6 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mass-t", type=float, help="train mass, t: converts traction_nkn to the frame's kN")
     p.add_argument("--t0", type=float, default=0.0, help="added to time_s for the log timestamps (0)")
     p.add_argument("--channel", default="vcan0")
+    p.add_argument("--no-fix-time", action="store_true", help="send positions without a fix time (an older sender)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     return p
 
@@ -60,7 +61,7 @@ def main(argv=None) -> int:
     else:
         print("hstpf-encode: need a force_kn or traction_nkn column", file=sys.stderr)
         return 2
-    times, pos, force, pv, tv = [], [], [], [], []
+    times, pos, force, pv, tv, fix = [], [], [], [], [], []
     last_t = -math.inf
     for i, r in enumerate(rows, start=2):
         t = _num(r["time_s"])
@@ -74,7 +75,8 @@ def main(argv=None) -> int:
         force.append(conv(u) if u is not None else 0.0)
         pv.append(y is not None)
         tv.append(u is not None)
-    msgs = input_frames(FrameCodec(a.dbc), a.t0, times, pos, force, a.channel, pv, tv)
+        fix.append(_num(r["fix_time_s"]) if "fix_time_s" in cols else a.t0 + t)
+    msgs = input_frames(FrameCodec(a.dbc), a.t0, times, pos, force, a.channel, pv, tv, fix, not a.no_fix_time)
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)
     n = write_log(a.out, msgs, a.channel)
     print(json.dumps({"log": a.out, "rows": len(rows), "frames": n}))

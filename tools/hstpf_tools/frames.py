@@ -85,6 +85,18 @@ def load_db(path: Optional[str] = None):
     return _load(str(dbc_path(path)))
 
 
+def _fix_time_wrap() -> int:
+    try:
+        sig = load_db().get_message_by_name("Position").get_signal_by_name("FixTime")
+    except FileNotFoundError:  # no source tree: the DBC's value (docs/can.md)
+        return 8192
+    return 1 << sig.length
+
+
+#: Position.FixTime wraps at this many ms (from the DBC's signal width).
+FIX_TIME_WRAP_MS = _fix_time_wrap()
+
+
 def data_id(msg) -> int:
     return int(msg.dbc.attributes["HstpfE2EDataId"].value)
 

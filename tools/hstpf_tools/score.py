@@ -22,8 +22,8 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from . import e2e
-from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
-                     type_name)
+from .frames import (EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE,
+                     FrameCodec, type_name)
 from .logio import read_log
 from .model import Theta
 
@@ -85,6 +85,39 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             continue
         series[name].append((t, sig))
     return series, e2e_results
+
+
+def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
+    """The recorded position frames' fix times (Position.FixTime) against
+    their receive stamps: how many carry one, the rate of the receive clock
+    per fix-clock second (1 / replay speed) and the receive jitter, in ms of
+    the fix clock (the error a receiver that dates fixes on receipt makes).
+    Only E2E-accepted frames count."""
+    codec = FrameCodec(dbc, timeout_s=math.inf)
+    pos_id = codec.message(POSITION).frame_id
+    rx, fix = [], []
+    for m in rec_msgs:
+        if m.arbitration_id != pos_id or m.is_error_frame:
+            continue
+        _, sig, _ = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
+        if sig is not None and sig.get("FixTimeValid", 0) >= 0.5 and sig["PosValid"] >= 0.5:
+            rx.append(m.timestamp)
+            fix.append(int(sig["FixTime"]))
+    out: dict = {"fix_time_frames": len(fix)}
+    if len(fix) < 3:
+        return out
+    d = np.diff(np.array(fix, dtype=np.int64)) % FIX_TIME_WRAP_MS
+    d = np.where(d > FIX_TIME_WRAP_MS // 2, d - FIX_TIME_WRAP_MS, d)  # consecutive fixes: within half a wrap
+    fix_u = np.concatenate(([0], np.cumsum(d))).astype(float)  # ms
+    b, a = np.polyfit(fix_u, np.array(rx), 1)
+    if not b > 0:
+        return out
+    lat = (np.array(rx) - (a + b * fix_u)) / b  # ms of the fix clock
+    lat -= np.min(lat)  # latency above the least one seen
+    out["rx_s_per_fix_s"] = float(b * 1000.0)
+    out["rx_latency_ms"] = {"p50": float(np.percentile(lat, 50)), "p99": float(np.percentile(lat, 99)),
+                            "max": float(np.max(lat))}
+    return out
 
 
 def metrics(series, truth) -> dict:
@@ -249,18 +282,21 @@ def main(argv=None) -> int:
             if m.arbitration_id == pos_id:
                 input_map.setdefault(bytes(m.data), m.timestamp - t_first)
     truth = read_truth(a.truth)
-    series, e2e_res = collect(read_log(a.log), codec, align, input_map, a.t0, a.speed)
+    rec = read_log(a.log)
+    series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
+    res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
     res["output_e2e"] = e2e_res
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
         res["plots"] = plots(series, truth, Path(a.plots))
     for k, v in res.items():
-        if k not in ("output_e2e", "health", "frames"):
+        if k not in ("output_e2e", "health", "frames", "inputs"):
             print(f"{k:38s} {_fmt(v)}")
     if "health" in res:
         print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()))
+    print("inputs".ljust(38), json.dumps(res["inputs"]))
     bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
     print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}))
     if a.json:

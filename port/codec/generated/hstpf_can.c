@@ -171,13 +171,16 @@ int hstpf_can_position_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->pos_valid, 4u, 0x10u);
-    dst_p[1] |= pack_left_shift_u8(src_p->pos_quality, 5u, 0xe0u);
+    dst_p[1] |= pack_left_shift_u8(src_p->pos_quality, 5u, 0x60u);
+    dst_p[1] |= pack_left_shift_u8(src_p->fix_time_valid, 7u, 0x80u);
     position = (uint64_t)src_p->position;
     dst_p[2] |= pack_left_shift_u64(position, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u64(position, 8u, 0xffu);
     dst_p[4] |= pack_right_shift_u64(position, 16u, 0xffu);
     dst_p[5] |= pack_right_shift_u64(position, 24u, 0xffu);
-    dst_p[6] |= pack_right_shift_u64(position, 32u, 0xffu);
+    dst_p[6] |= pack_right_shift_u64(position, 32u, 0x07u);
+    dst_p[6] |= pack_left_shift_u16(src_p->fix_time, 3u, 0xf8u);
+    dst_p[7] |= pack_right_shift_u16(src_p->fix_time, 5u, 0xffu);
 
     return (8);
 }
@@ -196,18 +199,21 @@ int hstpf_can_position_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->pos_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
-    dst_p->pos_quality = unpack_right_shift_u8(src_p[1], 5u, 0xe0u);
+    dst_p->pos_quality = unpack_right_shift_u8(src_p[1], 5u, 0x60u);
+    dst_p->fix_time_valid = unpack_right_shift_u8(src_p[1], 7u, 0x80u);
     position = unpack_right_shift_u64(src_p[2], 0u, 0xffu);
     position |= unpack_left_shift_u64(src_p[3], 8u, 0xffu);
     position |= unpack_left_shift_u64(src_p[4], 16u, 0xffu);
     position |= unpack_left_shift_u64(src_p[5], 24u, 0xffu);
-    position |= unpack_left_shift_u64(src_p[6], 32u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[6], 32u, 0x07u);
 
-    if ((position & (1ull << 39)) != 0ull) {
-        position |= 0xffffff0000000000ull;
+    if ((position & (1ull << 34)) != 0ull) {
+        position |= 0xfffffff800000000ull;
     }
 
     dst_p->position = (int64_t)position;
+    dst_p->fix_time = unpack_right_shift_u16(src_p[6], 3u, 0xf8u);
+    dst_p->fix_time |= unpack_left_shift_u16(src_p[7], 5u, 0xffu);
 
     return (0);
 }
@@ -295,32 +301,72 @@ double hstpf_can_position_pos_quality_decode(uint8_t value)
 
 bool hstpf_can_position_pos_quality_is_in_range(uint8_t value)
 {
-    return (value <= 7u);
+    return (value <= 3u);
 }
 
 bool hstpf_can_position_pos_quality_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 7.0));
+    return ((value >= 0.0) && (value <= 3.0));
+}
+
+uint8_t hstpf_can_position_fix_time_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_position_fix_time_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_position_fix_time_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_position_fix_time_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
 }
 
 int64_t hstpf_can_position_position_encode(double value)
 {
-    return (int64_t)(round(value / 0.001));
+    return (int64_t)(round(value / 0.01));
 }
 
 double hstpf_can_position_position_decode(int64_t value)
 {
-    return ((double)value * 0.001);
+    return ((double)value * 0.01);
 }
 
 bool hstpf_can_position_position_is_in_range(int64_t value)
 {
-    return ((value >= -100000000000ll) && (value <= 100000000000ll));
+    return ((value >= -10000000000ll) && (value <= 10000000000ll));
 }
 
 bool hstpf_can_position_position_is_in_phys_range(double value)
 {
     return ((value >= -100000000.0) && (value <= 100000000.0));
+}
+
+uint16_t hstpf_can_position_fix_time_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_position_fix_time_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_position_fix_time_is_in_range(uint16_t value)
+{
+    return (value <= 8191u);
+}
+
+bool hstpf_can_position_fix_time_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 8191.0));
 }
 
 int hstpf_can_traction_pack(

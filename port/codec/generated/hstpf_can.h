@@ -89,6 +89,9 @@ extern "C" {
 #define HSTPF_CAN_POSITION_POS_QUALITY_GNSS_CHOICE (2u)
 #define HSTPF_CAN_POSITION_POS_QUALITY_BALISE_CHOICE (3u)
 
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_ABSENT_CHOICE (0u)
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_PRESENT_CHOICE (1u)
+
 #define HSTPF_CAN_TRACTION_TRACT_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_TRACTION_TRACT_VALID_VALID_CHOICE (1u)
 
@@ -156,7 +159,9 @@ extern "C" {
 #define HSTPF_CAN_POSITION_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_POSITION_POS_VALID_NAME "PosValid"
 #define HSTPF_CAN_POSITION_POS_QUALITY_NAME "PosQuality"
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_NAME "FixTimeValid"
 #define HSTPF_CAN_POSITION_POSITION_NAME "Position"
+#define HSTPF_CAN_POSITION_FIX_TIME_NAME "FixTime"
 #define HSTPF_CAN_TRACTION_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_TRACTION_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_TRACTION_TRACT_VALID_NAME "TractValid"
@@ -233,20 +238,38 @@ struct hstpf_can_position_t {
     /**
      * Source of the fix; informative only.
      *
-     * Range: 0..7 (0..7 -)
+     * Range: 0..3 (0..3 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t pos_quality;
 
     /**
-     * Distance along the run from its origin, signed (a noisy fix near the origin can be negative), 1 mm; range as the library accepts (1e8 m).
+     * 1: FixTime holds the time of this fix; 0: the sender has no fix clock (the receiver dates the fix by its receive time).
      *
-     * Range: -100000000000..100000000000 (-100000000..100000000 m)
-     * Scale: 0.001
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fix_time_valid;
+
+    /**
+     * Distance along the run from its origin, signed (a noisy fix near the origin can be negative), 1 cm; range as the library accepts (+-1e8 m; the 35-bit field holds +-1.7e8 m).
+     *
+     * Range: -10000000000..10000000000 (-100000000..100000000 m)
+     * Scale: 0.01
      * Offset: 0
      */
     int64_t position;
+
+    /**
+     * Time the position was measured, on the sender's own millisecond clock, modulo 8192 (1 ms resolution, wraps every 8.192 s). Only differences are used, taken modulo 8192: consecutive fixes fewer than 4.096 s apart are dated exactly; across a longer gap the receiver resolves the wraps with its receive times.
+     *
+     * Range: 0..8191 (0..8191 ms)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t fix_time;
 };
 
 /**
@@ -816,6 +839,46 @@ bool hstpf_can_position_pos_quality_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
+uint8_t hstpf_can_position_fix_time_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_position_fix_time_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 int64_t hstpf_can_position_position_encode(double value);
 
 /**
@@ -848,6 +911,46 @@ bool hstpf_can_position_position_is_in_range(int64_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_position_position_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_position_fix_time_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_position_fix_time_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_is_in_phys_range(double value);
 
 /**
  * Pack message Traction.

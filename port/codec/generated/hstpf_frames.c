@@ -49,12 +49,22 @@ uint8_t hstpf_frames_position_pos_valid_raw(double phys)
 
 uint8_t hstpf_frames_position_pos_quality_raw(double phys)
 {
-    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 7.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
+}
+
+uint8_t hstpf_frames_position_fix_time_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
 int64_t hstpf_frames_position_position_raw(double phys)
 {
-    return (int64_t)raw_sat(phys, 0.001, 0.0, -100000000000.0, 100000000000.0);
+    return (int64_t)raw_sat(phys, 0.01, 0.0, -10000000000.0, 10000000000.0);
+}
+
+uint16_t hstpf_frames_position_fix_time_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 8191.0);
 }
 
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys)

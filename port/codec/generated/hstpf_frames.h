@@ -53,6 +53,9 @@ extern "C" {
 #define HSTPF_FRAME_HEALTH_SYS_LENGTH 8u
 #define HSTPF_FRAME_HEALTH_SYS_CYCLE_MS 1000u
 
+/** Position.FixTime wraps at this many ms: differences are taken modulo it. */
+#define HSTPF_FIX_TIME_WRAP_MS 8192u
+
 /** One frame of the DBC. */
 typedef struct {
     uint32_t can_id;   /**< 11-bit identifier */
@@ -76,10 +79,14 @@ const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);
  */
 /** Position.PosValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_position_pos_valid_raw(double phys);
-/** Position.PosQuality: scale 1, [0, 7]. */
+/** Position.PosQuality: scale 1, [0, 3]. */
 uint8_t hstpf_frames_position_pos_quality_raw(double phys);
-/** Position.Position: scale 0.001, [-1e+08, 1e+08] m. */
+/** Position.FixTimeValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_position_fix_time_valid_raw(double phys);
+/** Position.Position: scale 0.01, [-1e+08, 1e+08] m. */
 int64_t hstpf_frames_position_position_raw(double phys);
+/** Position.FixTime: scale 1, [0, 8191] ms. */
+uint16_t hstpf_frames_position_fix_time_raw(double phys);
 /** Traction.TractValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys);
 /** Traction.TractForce: scale 0.01, [-83886.1, 83886.1] kN. */
