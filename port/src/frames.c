@@ -14,13 +14,13 @@
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms)
 {
     hstpf_e2e_rx_config_t c;
-    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_POSITION_DATA_ID, HSTPF_FRAME_POSITION_LENGTH);
+    (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_POSITION_ID);
     c.max_delta = max_delta;
     c.timeout_ms = pos_timeout_ms;
     if (hstpf_e2e_rx_init(&st->pos, &c) != 0) {
         return -1;
     }
-    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_TRACTION_DATA_ID, HSTPF_FRAME_TRACTION_LENGTH);
+    (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_TRACTION_ID);
     c.max_delta = max_delta;
     c.timeout_ms = trac_timeout_ms;
     return hstpf_e2e_rx_init(&st->trac, &c) == 0 ? 0 : -1;

@@ -40,6 +40,7 @@ typedef struct {
     hstpf_e2e_rx_t pos, trac;
 } hstpfd_rx_state_t;
 
+
 /* Returns 0, or -1 if a value is out of the checker's range. */
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms);
 /* Classifies, E2E-checks and decodes one frame received at now_ms. */

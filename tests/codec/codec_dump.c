@@ -6,6 +6,7 @@
  *                              conversion, cantools pack, E2E protect) and
  *                              prints one JSON line per frame: inputs, bytes,
  *                              and the values unpacked back by the C codec.
+ *   hstpf_codec_dump e2e       prints the E2E parameters the C codec uses.
  *   hstpf_codec_dump decode    reads a candump -L log on stdin and prints,
  *                              per frame, what the C codec unpacks and the
  *                              E2E check result (one default receiver per
@@ -358,7 +359,7 @@ static int decode_stdin(void)
     size_t i;
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         hstpf_e2e_rx_config_t c;
-        hstpf_e2e_rx_config_default(&c, hstpf_frames[i].data_id, hstpf_frames[i].length);
+        hstpf_frames_e2e_rx_config(&c, hstpf_frames[i].can_id); /* the DBC's parameters of the frame */
         hstpf_e2e_rx_init(&rx[i], &c);
     }
     while (fgets(line, sizeof line, stdin) != NULL) {
@@ -381,10 +382,33 @@ static int decode_stdin(void)
     return 0;
 }
 
+/* The E2E parameters the C codec uses: the default receiver configuration
+ * and each frame's (for tests/python/test_e2e_params.py). */
+static int e2e_params(void)
+{
+    hstpf_e2e_rx_config_t c;
+    size_t i;
+    hstpf_e2e_rx_config_default(&c, 0u, 8u);
+    printf("{\"profile\":\"%s\",\"default\":{\"max_delta\":%u,\"timeout_ms\":%u},\"frames\":{", HSTPF_E2E_PROFILE,
+           (unsigned)c.max_delta, (unsigned)c.timeout_ms);
+    for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
+        if (hstpf_frames_e2e_rx_config(&c, hstpf_frames[i].can_id) != 0) {
+            return 1;
+        }
+        printf("%s\"%s\":{\"data_id\":%u,\"max_delta\":%u,\"timeout_ms\":%u}", i ? "," : "", hstpf_frames[i].name,
+               (unsigned)c.data_id, (unsigned)c.max_delta, (unsigned)c.timeout_ms);
+    }
+    printf("}}\n");
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "decode") == 0) {
         return decode_stdin();
+    }
+    if (argc > 1 && strcmp(argv[1], "e2e") == 0) {
+        return e2e_params();
     }
     encode_set();
     return 0;

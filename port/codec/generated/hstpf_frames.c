@@ -4,13 +4,13 @@
 #include <stddef.h>
 
 const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
-    {0x100u, 0x1101u, 8u, 100u, "Position"},
-    {0x101u, 0x1102u, 8u, 100u, "Traction"},
-    {0x200u, 0x2101u, 8u, 100u, "EstState"},
-    {0x210u, 0x2102u, 8u, 1000u, "EstType"},
-    {0x211u, 0x2103u, 8u, 1000u, "EstTheta"},
-    {0x220u, 0x2104u, 8u, 1000u, "HealthRx"},
-    {0x221u, 0x2105u, 8u, 1000u, "HealthSys"},
+    {0x100u, 0x1101u, 8u, 100u, 3u, 500u, "Position"},
+    {0x101u, 0x1102u, 8u, 100u, 3u, 500u, "Traction"},
+    {0x200u, 0x2101u, 8u, 100u, 3u, 5000u, "EstState"},
+    {0x210u, 0x2102u, 8u, 1000u, 3u, 5000u, "EstType"},
+    {0x211u, 0x2103u, 8u, 1000u, 3u, 5000u, "EstTheta"},
+    {0x220u, 0x2104u, 8u, 1000u, 3u, 5000u, "HealthRx"},
+    {0x221u, 0x2105u, 8u, 1000u, 3u, 5000u, "HealthSys"},
 };
 
 const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)
@@ -23,6 +23,23 @@ const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)
         }
     }
     return NULL;
+}
+
+int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id)
+{
+    const hstpf_frame_info_t *f = hstpf_frame_find(can_id);
+
+    if (cfg == NULL) {
+        return HSTPF_E2E_E_NULL;
+    }
+    if (f == NULL) {
+        return HSTPF_E2E_E_ARG;
+    }
+    cfg->data_id = f->data_id;
+    cfg->length = f->length;
+    cfg->max_delta = f->e2e_max_delta;
+    cfg->timeout_ms = f->e2e_timeout_ms;
+    return 0;
 }
 
 /* Clamp in the raw domain first, so the integer conversion is defined. */

@@ -4,9 +4,18 @@
 
 #include <stdint.h>
 
+#include "hstpf_e2e.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* E2E parameters, from the DBC's attributes: the profile (HstpfE2EProfile)
+ * and the receiver defaults (BA_DEF_DEF_ of HstpfE2EMaxDeltaCounter and
+ * HstpfE2ETimeoutMs); each frame's own values are in hstpf_frames[]. */
+#define HSTPF_E2E_PROFILE "P01"
+#define HSTPF_E2E_DEFAULT_MAX_DELTA 3u
+#define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
 
 /** Number of frames in hstpf_frames[]. */
 #define HSTPF_FRAMES_COUNT 7u
@@ -16,42 +25,56 @@ extern "C" {
 #define HSTPF_FRAME_POSITION_DATA_ID 0x1101u
 #define HSTPF_FRAME_POSITION_LENGTH 8u
 #define HSTPF_FRAME_POSITION_CYCLE_MS 100u
+#define HSTPF_FRAME_POSITION_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_POSITION_E2E_TIMEOUT_MS 500u
 
 /* Traction: Traction/braking effort. */
 #define HSTPF_FRAME_TRACTION_ID 0x101u
 #define HSTPF_FRAME_TRACTION_DATA_ID 0x1102u
 #define HSTPF_FRAME_TRACTION_LENGTH 8u
 #define HSTPF_FRAME_TRACTION_CYCLE_MS 100u
+#define HSTPF_FRAME_TRACTION_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_TRACTION_E2E_TIMEOUT_MS 500u
 
 /* EstState: Estimated position and speed (blended over models). */
 #define HSTPF_FRAME_EST_STATE_ID 0x200u
 #define HSTPF_FRAME_EST_STATE_DATA_ID 0x2101u
 #define HSTPF_FRAME_EST_STATE_LENGTH 8u
 #define HSTPF_FRAME_EST_STATE_CYCLE_MS 100u
+#define HSTPF_FRAME_EST_STATE_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_STATE_E2E_TIMEOUT_MS 5000u
 
 /* EstType: Declared train type, its weight and status; current leader. */
 #define HSTPF_FRAME_EST_TYPE_ID 0x210u
 #define HSTPF_FRAME_EST_TYPE_DATA_ID 0x2102u
 #define HSTPF_FRAME_EST_TYPE_LENGTH 8u
 #define HSTPF_FRAME_EST_TYPE_CYCLE_MS 1000u
+#define HSTPF_FRAME_EST_TYPE_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_TYPE_E2E_TIMEOUT_MS 5000u
 
 /* EstTheta: Estimated Davis coefficients theta = sum q_l theta_l. */
 #define HSTPF_FRAME_EST_THETA_ID 0x211u
 #define HSTPF_FRAME_EST_THETA_DATA_ID 0x2103u
 #define HSTPF_FRAME_EST_THETA_LENGTH 8u
 #define HSTPF_FRAME_EST_THETA_CYCLE_MS 1000u
+#define HSTPF_FRAME_EST_THETA_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_THETA_E2E_TIMEOUT_MS 5000u
 
 /* HealthRx: Receiver fault counts since start, summed over both input streams; each saturates at 4095. */
 #define HSTPF_FRAME_HEALTH_RX_ID 0x220u
 #define HSTPF_FRAME_HEALTH_RX_DATA_ID 0x2104u
 #define HSTPF_FRAME_HEALTH_RX_LENGTH 8u
 #define HSTPF_FRAME_HEALTH_RX_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_RX_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_RX_E2E_TIMEOUT_MS 5000u
 
 /* HealthSys: Other fault counts since start; each saturates at 4095. */
 #define HSTPF_FRAME_HEALTH_SYS_ID 0x221u
 #define HSTPF_FRAME_HEALTH_SYS_DATA_ID 0x2105u
 #define HSTPF_FRAME_HEALTH_SYS_LENGTH 8u
 #define HSTPF_FRAME_HEALTH_SYS_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_SYS_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_SYS_E2E_TIMEOUT_MS 5000u
 
 /** Position.FixTime wraps at this many ms: differences are taken modulo it. */
 #define HSTPF_FIX_TIME_WRAP_MS 8192u
@@ -62,6 +85,8 @@ typedef struct {
     uint16_t data_id;  /**< E2E data ID */
     uint8_t length;    /**< bytes (DLC) */
     uint16_t cycle_ms; /**< nominal cycle time */
+    uint8_t e2e_max_delta;   /**< receiver: largest accepted counter step */
+    uint16_t e2e_timeout_ms; /**< receiver: stale after this long */
     const char *name;  /**< DBC message name */
 } hstpf_frame_info_t;
 
@@ -70,6 +95,11 @@ extern const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT];
 
 /** @brief The frame with this ID, or NULL (an unknown ID). O(frames). */
 const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);
+
+/** @brief Fills an E2E receiver configuration for frame can_id with the
+ * DBC's data ID, length, max delta counter and timeout.
+ * @return 0, HSTPF_E2E_E_NULL, or HSTPF_E2E_E_ARG (an unknown ID). */
+int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id);
 
 /*
  * Physical value -> raw signal value for the hstpf_can_*_t structs:
