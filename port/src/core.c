@@ -135,7 +135,7 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
     if (out != NULL && cfg->out_format == HSTPFD_OUT_CSV) {
         static const char *const pre[2] = {"q_", "ess_"};
         int w;
-        fputs("t,k,dt,u,y,err,pos,speed,c0,c1,c2,best,declared,status,pos_stale,trac_stale,restart", out);
+        fputs("t,k,dt,u,y,err,valid,pos,speed,c0,c1,c2,best,declared,status,pos_stale,trac_stale,restart", out);
         for (w = 0; w < 2; ++w) {
             for (l = 0; l < cfg->n_models; ++l) {
                 char col[HSTPFD_NAME_MAX + 8];
@@ -151,6 +151,47 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
 
 /* ---- outputs ----------------------------------------------------------- */
 
+/* The library's lock and validity (hstpf_estimate_t.valid) and
+ * hstpf_reacquire() are used once the library provides them (the API is in
+ * the header; set to 1 when the implementation is merged). Until then the
+ * daemon takes "has a fix" for the lock and restarts with hstpf_reset(). */
+#ifndef HSTPFD_LIB_LOCK_API
+#define HSTPFD_LIB_LOCK_API 0
+#endif
+
+static int lib_valid(const hstpf_estimate_t *e)
+{
+#if HSTPFD_LIB_LOCK_API
+    return e->valid != 0;
+#else
+    (void)e;
+    return 1;
+#endif
+}
+
+/* Every number published as valid is finite and within the library's
+ * documented ranges, and the filter has lock (docs/daemon.md, "Validity"). */
+static int est_valid(const hstpfd_core_t *c)
+{
+    const hstpf_estimate_t *e = &c->est;
+    uint16_t l;
+    if (!c->have_fix || !lib_valid(e) || !isfinite(e->position_m) || fabs(e->position_m) > HSTPF_POS_MAX_M ||
+        !isfinite((double)e->speed_mps)) {
+        return 0;
+    }
+    for (l = 0; l < 3; ++l) {
+        if (!isfinite((double)e->theta[l])) {
+            return 0;
+        }
+    }
+    for (l = 0; l < e->n_models; ++l) {
+        if (!isfinite((double)e->model[l].q)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
 {
     const hstpf_estimate_t *e = &c->est;
@@ -158,13 +199,23 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     const hstpf_e2e_counts_t *t = hstpf_e2e_rx_counts(&c->rx.trac);
     memset(v, 0, sizeof *v);
     v->have_fix = c->have_fix;
+    v->valid = (uint8_t)est_valid(c);
     v->position_m = e->position_m;
     v->speed_mps = (double)e->speed_mps;
     v->status = e->status;
-    v->declared_row = e->declared >= 0 ? c->row[e->declared] : -1;
-    v->declared_q = e->declared >= 0 ? (double)e->model[e->declared].q : 0.0;
-    v->leader_row = c->have_fix ? c->row[e->best] : -1;
-    v->leader_q = c->have_fix ? (double)e->model[e->best].q : 0.0;
+    /* a weight that is not finite names no type */
+    if (e->declared >= 0 && e->declared < (int)e->n_models && isfinite((double)e->model[e->declared].q)) {
+        v->declared_row = c->row[e->declared];
+        v->declared_q = (double)e->model[e->declared].q;
+    } else {
+        v->declared_row = -1;
+    }
+    if (c->have_fix && e->best >= 0 && e->best < (int)e->n_models && isfinite((double)e->model[e->best].q)) {
+        v->leader_row = c->row[e->best];
+        v->leader_q = (double)e->model[e->best].q;
+    } else {
+        v->leader_row = -1;
+    }
     v->theta[0] = (double)e->theta[0];
     v->theta[1] = (double)e->theta[1];
     v->theta[2] = (double)e->theta[2];
@@ -226,69 +277,109 @@ static void tx_service(hstpfd_core_t *c)
     }
 }
 
+/* A number of the step stream: %.*g, or, if it is not finite, JSON null /
+ * an empty CSV cell (the line's valid field is then 0). */
+static void out_num(FILE *fp, int csv, double x, int prec)
+{
+    if (isfinite(x)) {
+        fprintf(fp, "%.*g", prec, x);
+    } else if (!csv) {
+        fputs("null", fp);
+    }
+}
+
+/* The separator before a field: "," in CSV, ,"key": in JSON. */
+static void out_key(FILE *fp, int csv, const char *key)
+{
+    if (csv) {
+        fputc(',', fp);
+    } else {
+        fprintf(fp, ",\"%s\":", key);
+    }
+}
+
 static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 {
     const hstpf_estimate_t *e = &c->est;
     const hstpfd_config_t *cfg = c->cfg;
     FILE *fp = c->out;
+    const int csv = cfg->out_format == HSTPFD_OUT_CSV;
+    const int valid = est_valid(c);
     uint16_t l;
-    const char *best = c->have_fix ? cfg->models[e->best].name : NULL;
-    const char *decl = e->declared >= 0 ? cfg->models[e->declared].name : NULL;
+    const char *best = c->have_fix && e->best >= 0 && e->best < (int)cfg->n_models ? cfg->models[e->best].name : NULL;
+    const char *decl = e->declared >= 0 && e->declared < (int)cfg->n_models ? cfg->models[e->declared].name : NULL;
     if (fp == NULL) {
         return;
     }
-    if (cfg->out_format == HSTPFD_OUT_CSV) {
+    if (csv) {
         json_time(fp, st->t_us);
-        fprintf(fp, ",%lu,%.9g,%.9g,", (unsigned long)c->sched.n.steps, st->in.dt_s, st->in.traction);
-        if (st->in.has_position) {
-            fprintf(fp, "%.9g", st->in.position_m);
+        fprintf(fp, ",%lu", (unsigned long)c->sched.n.steps);
+    } else {
+        fputs("{\"t\":", fp);
+        json_time(fp, st->t_us);
+        fprintf(fp, ",\"k\":%lu", (unsigned long)c->sched.n.steps);
+    }
+    out_key(fp, csv, "dt");
+    out_num(fp, csv, st->in.dt_s, 9);
+    out_key(fp, csv, "u");
+    out_num(fp, csv, st->in.traction, 9);
+    out_key(fp, csv, "y");
+    out_num(fp, csv, st->in.has_position ? st->in.position_m : HUGE_VAL, 9);
+    out_key(fp, csv, "err");
+    if (rc != HSTPF_OK) {
+        if (csv) {
+            fputs(hstpfd_err_name(rc), fp);
+        } else {
+            json_str(fp, hstpfd_err_name(rc));
         }
-        fprintf(fp, ",%s,%.9g,%.9g,%.9g,%.9g,%.9g,", rc == HSTPF_OK ? "" : hstpfd_err_name(rc), e->position_m,
-                (double)e->speed_mps, (double)e->theta[0], (double)e->theta[1], (double)e->theta[2]);
+    } else if (!csv) {
+        fputs("null", fp);
+    }
+    if (csv) {
+        fprintf(fp, ",%d", valid ? 1 : 0);
+    } else {
+        fprintf(fp, ",\"valid\":%s", valid ? "true" : "false");
+    }
+    out_key(fp, csv, "pos");
+    out_num(fp, csv, e->position_m, 9);
+    out_key(fp, csv, "speed");
+    out_num(fp, csv, (double)e->speed_mps, 9);
+    if (csv) {
+        for (l = 0; l < 3; ++l) {
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->theta[l], 9);
+        }
+        fputc(',', fp);
         csv_str(fp, best != NULL ? best : "");
         fputc(',', fp);
         csv_str(fp, decl != NULL ? decl : "");
         fprintf(fp, ",%s,%u,%u,%u", status_name(e->status), (unsigned)st->pos_stale, (unsigned)st->trac_stale,
                 (unsigned)st->restart);
         for (l = 0; l < e->n_models; ++l) {
-            fprintf(fp, ",%.9g", (double)e->model[l].q);
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->model[l].q, 9);
         }
         for (l = 0; l < e->n_models; ++l) {
-            fprintf(fp, ",%.6g", (double)e->model[l].ess);
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->model[l].ess, 6);
         }
         fputc('\n', fp);
         return;
     }
-    fputs("{\"t\":", fp);
-    json_time(fp, st->t_us);
-    fprintf(fp, ",\"k\":%lu,\"dt\":", (unsigned long)c->sched.n.steps);
-    json_num(fp, st->in.dt_s);
-    fputs(",\"u\":", fp);
-    json_num(fp, st->in.traction);
-    fputs(",\"y\":", fp);
-    if (st->in.has_position) {
-        json_num(fp, st->in.position_m);
-    } else {
-        fputs("null", fp);
+    fputs(",\"theta\":[", fp);
+    for (l = 0; l < 3; ++l) {
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->theta[l], 9);
     }
-    fputs(",\"err\":", fp);
-    if (rc == HSTPF_OK) {
-        fputs("null", fp);
-    } else {
-        json_str(fp, hstpfd_err_name(rc));
-    }
-    fputs(",\"pos\":", fp);
-    json_num(fp, e->position_m);
-    fputs(",\"speed\":", fp);
-    json_num(fp, (double)e->speed_mps);
-    fprintf(fp, ",\"theta\":[%.9g,%.9g,%.9g],\"q\":[", (double)e->theta[0], (double)e->theta[1],
-            (double)e->theta[2]);
+    fputs("],\"q\":[", fp);
     for (l = 0; l < e->n_models; ++l) {
-        fprintf(fp, "%s%.9g", l ? "," : "", (double)e->model[l].q);
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->model[l].q, 9);
     }
     fputs("],\"ess\":[", fp);
     for (l = 0; l < e->n_models; ++l) {
-        fprintf(fp, "%s%.6g", l ? "," : "", (double)e->model[l].ess);
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->model[l].ess, 6);
     }
     fputs("],\"best\":", fp);
     if (best != NULL) {
@@ -350,6 +441,11 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
         c->have_decision = c->est.declared >= 0;
         c->decision_t = st->t_us;
     }
+    hstpfd_core_publish(c, st, rc);
+}
+
+void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
+{
     write_step(c, st, rc);
     /* the estimated state goes out after a step, at most once per cycle */
     if (!c->state_sent || c->t_now - c->last_state_tx >= hstpfd_tx_cycle_us(0) - hstpfd_tx_cycle_us(0) / 50) {
@@ -357,6 +453,11 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
         c->last_state_tx = c->t_now;
         transmit(c, 0);
     }
+}
+
+void hstpfd_core_send(hstpfd_core_t *c, unsigned i)
+{
+    transmit(c, i);
 }
 
 /* ---- time and frames --------------------------------------------------- */
@@ -573,13 +674,17 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
         fputs("null", fp);
     }
     fputs(",\"leader\":", fp);
-    if (c->have_fix) {
+    if (c->have_fix && e->best >= 0 && e->best < (int)cfg->n_models) {
         json_str(fp, cfg->models[e->best].name);
     } else {
         fputs("null", fp);
     }
-    fprintf(fp, ",\"theta\":[%.9g,%.9g,%.9g],\"position_m\":", (double)e->theta[0], (double)e->theta[1],
-            (double)e->theta[2]);
+    fputs(",\"theta\":[", fp);
+    for (i = 0; i < 3; ++i) {
+        fputs(i ? "," : "", fp);
+        out_num(fp, 0, (double)e->theta[i], 9);
+    }
+    fprintf(fp, "],\"valid\":%s,\"position_m\":", est_valid(c) ? "true" : "false");
     json_num(fp, e->position_m);
     fputs(",\"speed_mps\":", fp);
     json_num(fp, (double)e->speed_mps);
@@ -589,7 +694,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
             fputc(',', fp);
         }
         json_str(fp, cfg->models[l].name);
-        fprintf(fp, ":%.9g", (double)e->model[l].q);
+        fputc(':', fp);
+        out_num(fp, 0, (double)e->model[l].q, 9);
     }
     fputs("},\"faults\":{", fp);
     kv(fp, "bad_crc", (unsigned long)(p->bad_crc + t->bad_crc), 1);

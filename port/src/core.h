@@ -79,6 +79,14 @@ void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us);
  * timeout), or -1 before the first frame. */
 int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us);
 
+/* Publishes the estimate in c->est after a step (rc: the step's result):
+ * the step stream line and the state frame. Called by the step handler;
+ * public so that tests can publish a crafted estimate. */
+void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc);
+
+/* Sends output frame i (0..HSTPFD_N_OUTPUTS-1) now, from c->est. */
+void hstpfd_core_send(hstpfd_core_t *c, unsigned i);
+
 /* Writes the summary as one JSON line (with newline). source_kind is "log"
  * or "iface", source the file or interface, end why the run ended. */
 void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_kind, const char *source,

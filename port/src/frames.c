@@ -138,8 +138,12 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
     switch (i) {
     case 0: {
         struct hstpf_can_est_state_t m;
+        /* NaN fails the range test too: it is sent as 0, never as valid */
+        const int ok = hstpf_can_est_state_est_position_is_in_phys_range(v->position_m) &&
+                       hstpf_can_est_state_est_speed_is_in_phys_range(v->speed_mps);
         (void)hstpf_can_est_state_init(&m);
-        m.est_valid = v->have_fix ? 1u : 0u;
+        m.est_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.est_fault = (uint8_t)(v->have_fix && !ok);
         m.est_position = hstpf_frames_est_state_est_position_raw(v->have_fix ? v->position_m : 0.0);
         m.est_speed = hstpf_frames_est_state_est_speed_raw(v->have_fix ? v->speed_mps : 0.0);
         n = hstpf_can_est_state_pack(f->data, &m, 8u);
@@ -158,12 +162,12 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
     }
     case 2: {
         struct hstpf_can_est_theta_t m;
-        /* the signal ranges: c0 [0, 65.535], c1 [0, 0.065535], c2 [0, 0.0013107] */
-        const int sat = v->theta[0] < 0.0 || v->theta[0] > 65.535 || v->theta[1] < 0.0 || v->theta[1] > 0.065535 ||
-                        v->theta[2] < 0.0 || v->theta[2] > 0.0013107;
+        const int ok = hstpf_can_est_theta_c0_is_in_phys_range(v->theta[0]) &&
+                       hstpf_can_est_theta_c1_is_in_phys_range(v->theta[1]) &&
+                       hstpf_can_est_theta_c2_is_in_phys_range(v->theta[2]);
         (void)hstpf_can_est_theta_init(&m);
-        m.theta_valid = v->have_fix ? 1u : 0u;
-        m.theta_saturated = (uint8_t)(v->have_fix && sat);
+        m.theta_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.theta_saturated = (uint8_t)(v->have_fix && !ok);
         m.c0 = hstpf_frames_est_theta_c0_raw(v->theta[0]);
         m.c1 = hstpf_frames_est_theta_c1_raw(v->theta[1]);
         m.c2 = hstpf_frames_est_theta_c2_raw(v->theta[2]);

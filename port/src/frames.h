@@ -52,9 +52,13 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms);
 #define HSTPFD_N_INPUTS 2
 uint32_t hstpfd_input_id(unsigned i);
 
-/* Everything the output frames carry. */
+/* Everything the output frames carry. Validity rule (docs/can.md): a value
+ * goes out marked valid only when `valid` is set and the value is finite and
+ * within its signal's range; otherwise its frame's valid bit is 0 and, if
+ * the estimator has a fix, its fault/saturation bit is 1. */
 typedef struct {
     uint8_t have_fix;         /* the estimator has had its first fix */
+    uint8_t valid;            /* the estimate is valid (core.c: est_valid) */
     double position_m;
     double speed_mps;
     hstpf_status_t status;

@@ -89,22 +89,26 @@ static void traction(double valid, double force)
            hstpf_can_traction_tract_force_decode(m.tract_force));
 }
 
-static void est_state(double valid, double pos, double speed)
+static void est_state(double valid, double fault, double pos, double speed)
 {
     struct hstpf_can_est_state_t m;
     uint8_t f[8];
     hstpf_can_est_state_init(&m);
     m.est_valid = hstpf_frames_est_state_est_valid_raw(valid);
+    m.est_fault = hstpf_frames_est_state_est_fault_raw(fault);
     m.est_position = hstpf_frames_est_state_est_position_raw(pos);
     m.est_speed = hstpf_frames_est_state_est_speed_raw(speed);
     hstpf_can_est_state_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_STATE_ID), f, 8);
     hstpf_can_est_state_unpack(&m, f, 8);
     head("EstState", HSTPF_FRAME_EST_STATE_ID, f);
-    printf("\"in\":{\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g},", valid, pos, speed);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g}}\n",
+    printf("\"in\":{\"EstValid\":%.17g,\"EstFault\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g},", valid, fault,
+           pos, speed);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%.17g,\"EstFault\":%.17g,\"EstPosition\":%.17g,"
+           "\"EstSpeed\":%.17g}}\n",
            m.e2e_crc, m.e2e_counter, hstpf_can_est_state_est_valid_decode(m.est_valid),
-           hstpf_can_est_state_est_position_decode(m.est_position), hstpf_can_est_state_est_speed_decode(m.est_speed));
+           hstpf_can_est_state_est_fault_decode(m.est_fault), hstpf_can_est_state_est_position_decode(m.est_position),
+           hstpf_can_est_state_est_speed_decode(m.est_speed));
 }
 
 static void est_type(double status, double decl, double dw, double lead, double lw)
@@ -218,11 +222,11 @@ static void encode_set(void)
     traction(1, -412.07);
     traction(0, -83886.08);
     traction(1, 83886.07);
-    est_state(0, 0.0, 0.0);
-    est_state(1, 1234.567, 97.22);
-    est_state(1, 350123.456, -0.37);
-    est_state(1, -42.0, -327.68);
-    est_state(1, 21474836.47, 327.67);
+    est_state(0, 0, 0.0, 0.0);
+    est_state(1, 0, 1234.567, 97.22);
+    est_state(1, 0, 350123.456, -0.37);
+    est_state(1, 0, -42.0, -327.68);
+    est_state(0, 1, 21474836.47, 327.67);
     est_type(0, 255, 0.0, 2, 0.4711);
     est_type(1, 2, 0.9532, 2, 0.9532);
     est_type(2, 6, 1.0, 6, 1.0);
@@ -307,8 +311,9 @@ static int decode_line(const char *line)
     case HSTPF_FRAME_EST_STATE_ID: {
         struct hstpf_can_est_state_t m;
         hstpf_can_est_state_unpack(&m, f, n);
-        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%u,\"EstPosition\":%.17g,\"EstSpeed\":%.17g", m.e2e_crc,
-               m.e2e_counter, m.est_valid, hstpf_can_est_state_est_position_decode(m.est_position),
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%u,\"EstFault\":%u,\"EstPosition\":%.17g,"
+               "\"EstSpeed\":%.17g",
+               m.e2e_crc, m.e2e_counter, m.est_valid, m.est_fault, hstpf_can_est_state_est_position_decode(m.est_position),
                hstpf_can_est_state_est_speed_decode(m.est_speed));
         break;
     }

@@ -15,6 +15,8 @@
 #include <cmocka.h>
 
 #include "candump.h"
+#include "config.h"
+#include "core.h"
 #include "hstpf_can.h"
 #include "hstpf_e2e.h"
 #include "hstpf_frames.h"
@@ -310,6 +312,209 @@ static void test_fix_time_under_jitter(void **state)
     assert_true(b.resid_rms > 2.0 * a.resid_rms);
 }
 
+/* ---- the validity invariant on every output path (issue 11 items 1, 4) ---- */
+
+static hstpf_t v_filt;
+static hstpfd_config_t v_cfg;
+static hstpfd_core_t v_core;
+
+/* A core on 3 models writing its step stream to *out and frames to *fr. */
+static void v_start(FILE **out, FILE **fr, const char *format)
+{
+    char err[HSTPFD_ERR_MAX];
+    hstpfd_config_default(&v_cfg);
+    assert_int_equal(hstpfd_config_set(&v_cfg, "models", "SS1/SS3/SS4, CRH3, SS8", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&v_cfg, "log", "x.log", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&v_cfg, "out_format", format, err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&v_cfg, err, sizeof err), 0);
+    *out = tmpfile();
+    *fr = tmpfile();
+    assert_non_null(*out);
+    assert_non_null(*fr);
+    assert_int_equal(hstpfd_core_init(&v_core, &v_cfg, &v_filt, NULL, NULL, *out, *fr, "vcan0"), 0);
+}
+
+/* A plausible estimate: 1234.5 m, 50 m/s, CRH3 leading, everything valid. */
+static void v_estimate(void)
+{
+    hstpf_estimate_t *e = &v_core.est;
+    e->n_models = 3;
+    e->position_m = 1234.5;
+    e->speed_mps = 50.0f;
+    e->valid = 1;
+    e->theta[0] = 0.79f;
+    e->theta[1] = 0.0064f;
+    e->theta[2] = 0.000115f;
+    e->model[0].q = 0.1f;
+    e->model[1].q = 0.8f;
+    e->model[2].q = 0.1f;
+    e->best = 1;
+    e->declared = -1;
+    e->status = HSTPF_STATUS_UNDECIDED;
+    v_core.have_fix = 1;
+}
+
+/* Publishes v_core.est (step line + state frame) and frame i; returns the
+ * step line in line and the two frames decoded. */
+static void v_publish(FILE *out, FILE *fr, char *line, size_t size, unsigned i, hstpfd_frame_t *state,
+                      hstpfd_frame_t *other)
+{
+    hstpfd_step_t st;
+    char buf[256];
+    long at_out = ftell(out), at_fr = ftell(fr);
+    memset(&st, 0, sizeof st);
+    st.in.dt_s = 1.0;
+    st.in.has_position = 1;
+    st.in.position_m = 1234.0;
+    v_core.state_sent = 0; /* not rate-limited here */
+    hstpfd_core_publish(&v_core, &st, HSTPF_OK);
+    hstpfd_core_send(&v_core, i);
+    fflush(out);
+    fflush(fr);
+    fseek(out, at_out, SEEK_SET);
+    assert_non_null(fgets(line, (int)size, out));
+    fseek(fr, at_fr, SEEK_SET);
+    assert_non_null(fgets(buf, sizeof buf, fr));
+    assert_int_equal(hstpfd_candump_parse(buf, state, NULL, 0), HSTPFD_CANDUMP_OK);
+    assert_non_null(fgets(buf, sizeof buf, fr));
+    assert_int_equal(hstpfd_candump_parse(buf, other, NULL, 0), HSTPFD_CANDUMP_OK);
+    fseek(out, 0, SEEK_END);
+    fseek(fr, 0, SEEK_END);
+}
+
+static int has_nonfinite_text(const char *s)
+{
+    return strstr(s, "nan") != NULL || strstr(s, "NAN") != NULL || strstr(s, "inf") != NULL || strstr(s, "INF") != NULL;
+}
+
+static void test_validity_json_and_frames(void **state)
+{
+    FILE *out, *fr;
+    char line[4096];
+    hstpfd_frame_t fs, fo;
+    struct hstpf_can_est_state_t m;
+    struct hstpf_can_est_theta_t th;
+    struct hstpf_can_est_type_t ty;
+    (void)state;
+    v_start(&out, &fr, "jsonl");
+
+    /* valid: published as valid */
+    v_estimate();
+    v_publish(out, fr, line, sizeof line, 2, &fs, &fo);
+    assert_non_null(strstr(line, "\"valid\":true"));
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 1);
+    assert_int_equal(m.est_fault, 0);
+    assert_float_equal(hstpf_can_est_state_est_position_decode(m.est_position), 1234.5, 0.005);
+    assert_int_equal(hstpf_can_est_theta_unpack(&th, fo.data, fo.len), 0);
+    assert_int_equal(th.theta_valid, 1);
+    assert_int_equal(th.theta_saturated, 0);
+
+    /* NaN position (issue 11: it went out as a valid standing train) */
+    v_estimate();
+    v_core.est.position_m = 0.0 / 0.0;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_false(has_nonfinite_text(line));
+    assert_non_null(strstr(line, "\"valid\":false"));
+    assert_non_null(strstr(line, "\"pos\":null"));
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 0);
+    assert_int_equal(m.est_fault, 1);
+    assert_int_equal(m.est_position, 0);
+
+    /* infinite speed */
+    v_estimate();
+    v_core.est.speed_mps = (float)HUGE_VAL;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_false(has_nonfinite_text(line));
+    assert_non_null(strstr(line, "\"speed\":null"));
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 0);
+    assert_int_equal(m.est_fault, 1);
+
+    /* beyond the frame's range (+-21474836.47 m) but within the library's
+     * (1e8 m): the JSON carries it as valid, the frame clamps it and says so */
+    v_estimate();
+    v_core.est.position_m = 3.0e7;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_non_null(strstr(line, "\"valid\":true"));
+    assert_non_null(strstr(line, "\"pos\":30000000"));
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 0);
+    assert_int_equal(m.est_fault, 1);
+    assert_float_equal(hstpf_can_est_state_est_position_decode(m.est_position), 21474836.47, 1e-6);
+
+    /* beyond the library's range: invalid everywhere */
+    v_estimate();
+    v_core.est.position_m = -2.0e8;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_non_null(strstr(line, "\"valid\":false"));
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 0);
+    assert_int_equal(m.est_fault, 1);
+
+    /* a coefficient beyond EstTheta's range: clipped, flagged, not valid */
+    v_estimate();
+    v_core.est.theta[2] = 0.01f;
+    v_publish(out, fr, line, sizeof line, 2, &fs, &fo);
+    assert_int_equal(hstpf_can_est_theta_unpack(&th, fo.data, fo.len), 0);
+    assert_int_equal(th.theta_valid, 0);
+    assert_int_equal(th.theta_saturated, 1);
+    assert_int_equal(th.c2, 65535u);
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 1); /* the state itself is fine */
+
+    /* a NaN weight: no leader named, nothing valid, no NaN in the text */
+    v_estimate();
+    v_core.est.model[1].q = 0.0f / 0.0f;
+    v_core.est.theta[0] = 0.0f / 0.0f;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_false(has_nonfinite_text(line));
+    assert_non_null(strstr(line, "\"valid\":false"));
+    assert_non_null(strstr(line, "\"q\":[0.100000001,null,0.100000001]"));
+    assert_int_equal(hstpf_can_est_type_unpack(&ty, fo.data, fo.len), 0);
+    assert_int_equal(ty.leader_type, 255u);
+    assert_int_equal(ty.leader_weight, 0u);
+    /* and the summary line */
+    {
+        FILE *sf = tmpfile();
+        char sum[16384];
+        size_t n;
+        assert_non_null(sf);
+        hstpfd_core_summary(&v_core, sf, "log", "x.log", "eof");
+        rewind(sf);
+        n = fread(sum, 1, sizeof sum - 1, sf);
+        sum[n] = '\0';
+        fclose(sf);
+        assert_false(has_nonfinite_text(sum));
+        assert_non_null(strstr(sum, "\"valid\":false"));
+    }
+    fclose(out);
+    fclose(fr);
+}
+
+static void test_validity_csv(void **state)
+{
+    FILE *out, *fr;
+    char line[4096];
+    hstpfd_frame_t fs, fo;
+    (void)state;
+    v_start(&out, &fr, "csv");
+    assert_non_null(fgets(line, sizeof line, (rewind(out), out)));
+    assert_int_equal(strncmp(line, "t,k,dt,u,y,err,valid,pos,speed,", 31), 0);
+    fseek(out, 0, SEEK_END);
+    v_estimate();
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_non_null(strstr(line, ",,1,1234.5,50,")); /* err empty, valid 1 */
+    v_estimate();
+    v_core.est.position_m = 0.0 / 0.0;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_false(has_nonfinite_text(line));
+    assert_non_null(strstr(line, ",,0,,50,")); /* valid 0, pos empty */
+    fclose(out);
+    fclose(fr);
+}
+
 /* SIGINT while reading: a clean exit with the summary, end "signal". */
 static void test_signal(void **state)
 {
@@ -357,6 +562,8 @@ int main(void)
         cmocka_unit_test(test_deterministic_and_time_scale),
         cmocka_unit_test(test_output_frames),
         cmocka_unit_test(test_fix_time_under_jitter),
+        cmocka_unit_test(test_validity_json_and_frames),
+        cmocka_unit_test(test_validity_csv),
         cmocka_unit_test(test_signal),
         cmocka_unit_test(test_bad_configuration),
     };

@@ -528,6 +528,7 @@ int hstpf_can_est_state_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->est_valid, 4u, 0x10u);
+    dst_p[1] |= pack_left_shift_u8(src_p->est_fault, 5u, 0x20u);
     est_position = (uint32_t)src_p->est_position;
     dst_p[2] |= pack_left_shift_u32(est_position, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u32(est_position, 8u, 0xffu);
@@ -555,6 +556,7 @@ int hstpf_can_est_state_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->est_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->est_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
     est_position = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
     est_position |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
     est_position |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
@@ -634,6 +636,26 @@ bool hstpf_can_est_state_est_valid_is_in_range(uint8_t value)
 }
 
 bool hstpf_can_est_state_est_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_state_est_fault_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_state_est_fault_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_state_est_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_state_est_fault_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 1.0));
 }

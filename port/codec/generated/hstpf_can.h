@@ -98,6 +98,9 @@ extern "C" {
 #define HSTPF_CAN_EST_STATE_EST_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_EST_STATE_EST_VALID_VALID_CHOICE (1u)
 
+#define HSTPF_CAN_EST_STATE_EST_FAULT_NONE_CHOICE (0u)
+#define HSTPF_CAN_EST_STATE_EST_FAULT_CLAMPED_CHOICE (1u)
+
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_UNDECIDED_CHOICE (0u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_DECLARED_CHOICE (1u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_CHANGED_CHOICE (2u)
@@ -169,6 +172,7 @@ extern "C" {
 #define HSTPF_CAN_EST_STATE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_STATE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_STATE_EST_VALID_NAME "EstValid"
+#define HSTPF_CAN_EST_STATE_EST_FAULT_NAME "EstFault"
 #define HSTPF_CAN_EST_STATE_EST_POSITION_NAME "EstPosition"
 #define HSTPF_CAN_EST_STATE_EST_SPEED_NAME "EstSpeed"
 #define HSTPF_CAN_EST_TYPE_E2E_CRC_NAME "E2eCrc"
@@ -336,13 +340,22 @@ struct hstpf_can_est_state_t {
     uint8_t e2e_counter;
 
     /**
-     * 1: the estimator has had its first fix.
+     * 1: the estimate is valid (the estimator has lock: finite, within its documented ranges) and both values of this frame are finite and within their signal ranges. 0: do not use EstPosition or EstSpeed.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t est_valid;
+
+    /**
+     * 1: a value of this frame could not be published as it is: non-finite (sent as 0) or beyond its signal's range (clamped); EstValid is then 0.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t est_fault;
 
     /**
      * Estimated position, same origin as Position, 1 cm (+-21474 km).
@@ -454,7 +467,7 @@ struct hstpf_can_est_theta_t {
     uint8_t e2e_counter;
 
     /**
-     * 1: C0..C2 hold an estimate.
+     * 1: C0..C2 hold a valid estimate, each finite and within its signal range.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
@@ -463,7 +476,7 @@ struct hstpf_can_est_theta_t {
     uint8_t theta_valid;
 
     /**
-     * 1: at least one coefficient was clipped to its signal range.
+     * 1: at least one coefficient was non-finite (sent as 0) or clipped to its signal range; ThetaValid is then 0.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
@@ -1305,6 +1318,46 @@ bool hstpf_can_est_state_est_valid_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_est_state_est_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_state_est_fault_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_state_est_fault_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_state_est_fault_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_state_est_fault_is_in_phys_range(double value);
 
 /**
  * Encode given signal by applying scaling and offset.

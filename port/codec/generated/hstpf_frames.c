@@ -99,6 +99,11 @@ uint8_t hstpf_frames_est_state_est_valid_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
+uint8_t hstpf_frames_est_state_est_fault_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
 int32_t hstpf_frames_est_state_est_position_raw(double phys)
 {
     return (int32_t)raw_sat(phys, 0.01, 0.0, -2147483648.0, 2147483647.0);

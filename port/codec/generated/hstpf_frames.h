@@ -123,6 +123,8 @@ uint8_t hstpf_frames_traction_tract_valid_raw(double phys);
 int32_t hstpf_frames_traction_tract_force_raw(double phys);
 /** EstState.EstValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_est_state_est_valid_raw(double phys);
+/** EstState.EstFault: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_state_est_fault_raw(double phys);
 /** EstState.EstPosition: scale 0.01, [-2.14748e+07, 2.14748e+07] m. */
 int32_t hstpf_frames_est_state_est_position_raw(double phys);
 /** EstState.EstSpeed: scale 0.01, [-327.68, 327.67] m/s. */
