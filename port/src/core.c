@@ -112,7 +112,7 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
         return rc;
     }
     if (hstpfd_sched_init(&c->sched, &cfg->sched, on_step, c) != 0) {
-        return HSTPF_E_CONFIG;
+        return HSTPFD_E_SCHED;
     }
     if (hstpfd_rx_init(&c->rx, (uint8_t)cfg->e2e_max_delta, (uint32_t)(cfg->sched.pos_timeout_s * 1000.0 + 0.5),
                        (uint32_t)(cfg->sched.trac_timeout_s * 1000.0 + 0.5)) != 0) {
@@ -127,8 +127,8 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
                         : -2;
     }
     c->tick_us = (int64_t)(cfg->tick_s * 1e6 / cfg->time_scale + 0.5);
-    if (c->tick_us < 1) {
-        c->tick_us = 1;
+    if (c->tick_us < 1000) {
+        c->tick_us = 1000; /* 1 ms of source time: the poll timeout's resolution */
     }
     c->declared_prev = -1;
     (void)hstpf_estimate(filt, &c->est);
@@ -229,6 +229,10 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->unknown_id = c->n.unknown;
     v->error_frames = c->n.error;
     v->degeneracy = c->n.degeneracy;
+    v->clock_fwd = c->sched.n.clock_fwd;
+    v->clock_back = c->sched.n.clock_back;
+    v->late = c->sched.n.late;
+    v->reacquire = c->n.reacquire;
 }
 
 static void transmit(hstpfd_core_t *c, unsigned i)
@@ -399,6 +403,22 @@ static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 
 /* ---- steps --------------------------------------------------------------- */
 
+/* Drops the lock: after a gap beyond max_gap_s or a clock step the filter
+ * starts again from the next fix (hstpf_reacquire keeps the model weights;
+ * without the library's lock API, hstpf_reset starts from scratch). */
+static void reacquire(hstpfd_core_t *c)
+{
+#if HSTPFD_LIB_LOCK_API
+    (void)hstpf_reacquire(c->filt);
+#else
+    (void)hstpf_reset(c->filt);
+    c->declared_prev = -1;
+    memset(c->floor_prev, 0, sizeof c->floor_prev);
+#endif
+    c->have_fix = 0;
+    ++c->n.reacquire;
+}
+
 static void on_step(void *ctx, const hstpfd_step_t *st)
 {
     hstpfd_core_t *c = (hstpfd_core_t *)ctx;
@@ -406,10 +426,7 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
     uint16_t l;
     int degenerate = 0;
     if (st->restart) {
-        (void)hstpf_reset(c->filt);
-        c->have_fix = 0;
-        c->declared_prev = -1;
-        memset(c->floor_prev, 0, sizeof c->floor_prev);
+        reacquire(c);
     }
     rc = hstpf_step(c->filt, &st->in);
     if (rc == HSTPF_OK) {
@@ -470,9 +487,30 @@ static int64_t frame_time(const hstpfd_core_t *c, int64_t src)
     return c->src0 + (int64_t)floor((double)(src - c->src0) * c->cfg->time_scale + 0.5);
 }
 
+/* A source stamp this far behind the latest time is a step of its clock. */
+#define CLOCK_BACK_US INT64_C(1000000)
+
+/* Source time -> the daemon's timeline, which never goes back and never
+ * jumps ahead by more than max_gap_s + 1 s (docs/daemon.md, "Time"): a stamp
+ * more than 1 s behind the latest, or more than max_gap_s ahead of it, is a
+ * clock step; the timeline carries on from the latest time (back) or
+ * advances by max_gap_s + 1 s only (forward), the step is counted and the
+ * estimator re-acquires at the next fix. */
 static void set_time(hstpfd_core_t *c, int64_t src)
 {
-    const int64_t t = frame_time(c, src);
+    int64_t t = frame_time(c, src) + c->base;
+    if (t < c->t_now - CLOCK_BACK_US) {
+        c->base += c->t_now - t;
+        c->last_src = src;
+        c->src_now = src;
+        t = c->t_now;
+        hstpfd_sched_clock_step(&c->sched, t, -1);
+    } else if (t > c->t_now + c->sched.gap_us) {
+        const int64_t t2 = c->t_now + c->sched.gap_us + CLOCK_BACK_US;
+        c->base -= t - t2;
+        t = c->t_now = t2;
+        hstpfd_sched_clock_step(&c->sched, t, 1);
+    }
     if (t > c->t_now) {
         c->t_now = t;
     }
@@ -507,10 +545,25 @@ void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us)
     if (!c->have_time) {
         return;
     }
+    if (frame_time(c, t_src_us) + c->base - c->t_now > c->sched.gap_us) {
+        /* a forward step of the clock: one tick, none across it */
+        c->last_src = t_src_us;
+        tick(c, t_src_us);
+        return;
+    }
     while (c->last_src + c->tick_us <= t_src_us) {
+        if (c->stop != NULL && *c->stop) {
+            return;
+        }
         c->last_src += c->tick_us;
         tick(c, c->last_src);
     }
+}
+
+void hstpfd_core_set_stop(hstpfd_core_t *c, const volatile sig_atomic_t *stop)
+{
+    c->stop = stop;
+    hstpfd_sched_set_stop(&c->sched, stop);
 }
 
 int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us)
@@ -550,11 +603,15 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
     hstpfd_rx_decode(&c->rx, f, now_ms, &r);
     switch (r.kind) {
     case HSTPFD_RX_POSITION: {
-        /* consecutive fixes of one unbroken E2E sequence: their fix times differ by less than the wrap */
-        const int in_seq = c->pos_prev_fix && (r.e2e == HSTPF_E2E_OK || r.e2e == HSTPF_E2E_OK_LOST);
+        /* consecutive fixes: the previous accepted position frame was a fix and
+         * the alive counter moved on by 1..max_delta since (also across a
+         * stale gap: a receive clock step leaves the counter in sequence) */
+        const unsigned d_cnt = (r.counter + 15u - c->pos_last_counter) % 15u;
+        const int in_seq = c->pos_prev_fix && r.accepted && d_cnt >= 1u && d_cnt <= c->cfg->e2e_max_delta;
         ++c->n.position;
         if (r.accepted || r.e2e == HSTPF_E2E_COUNTER_JUMP) {
             c->pos_prev_fix = r.valid;
+            c->pos_last_counter = r.counter;
         }
         if (r.valid) {
             hstpfd_sched_position_at(&c->sched, c->t_now, r.value,
@@ -714,6 +771,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "error_frames", (unsigned long)c->n.error, 0);
     kv(fp, "late_position", (unsigned long)s->late, 0);
     kv(fp, "time_backwards", (unsigned long)s->time_backwards, 0);
+    kv(fp, "clock_steps_forward", (unsigned long)s->clock_fwd, 0);
+    kv(fp, "clock_steps_back", (unsigned long)s->clock_back, 0);
     kv(fp, "bad_lines", (unsigned long)c->n.bad_lines, 0);
     fputs("},\"e2e\":{\"position\":{", fp);
     kv(fp, "ok", (unsigned long)p->ok, 1);
@@ -753,6 +812,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "decimated", (unsigned long)s->decimated, 1);
     kv(fp, "split", (unsigned long)s->split, 0);
     kv(fp, "fix_dated", (unsigned long)s->fix_dated, 0);
+    kv(fp, "fix_clock_steps", (unsigned long)s->fix_clock_steps, 0);
+    kv(fp, "reacquire", (unsigned long)c->n.reacquire, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);
     fputs("},\"io\":{", fp);

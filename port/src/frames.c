@@ -57,6 +57,7 @@ void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t n
         out->accepted = (uint8_t)(hstpf_e2e_accepted(out->e2e) != 0);
         if (out->accepted && hstpf_can_position_unpack(&m, f->data, f->len) == 0) {
             out->value = hstpf_can_position_position_decode(m.position);
+            out->counter = m.e2e_counter;
             out->valid = (uint8_t)(m.pos_valid == HSTPF_CAN_POSITION_POS_VALID_VALID_CHOICE);
             out->has_fix_time = (uint8_t)(m.fix_time_valid == HSTPF_CAN_POSITION_FIX_TIME_VALID_PRESENT_CHOICE);
             out->fix_time_ms = (uint16_t)(m.fix_time % HSTPF_FIX_TIME_WRAP_MS);
@@ -83,15 +84,15 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
     (void)hstpf_e2e_rx_poll(&st->trac, now_ms);
 }
 
-static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID,
-                                                  HSTPF_FRAME_EST_THETA_ID, HSTPF_FRAME_HEALTH_RX_ID,
-                                                  HSTPF_FRAME_HEALTH_SYS_ID};
+static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID,  HSTPF_FRAME_EST_TYPE_ID,
+                                                  HSTPF_FRAME_EST_THETA_ID,  HSTPF_FRAME_HEALTH_RX_ID,
+                                                  HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID};
 static const uint16_t out_data_id[HSTPFD_N_OUTPUTS] = {
-    HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID, HSTPF_FRAME_EST_THETA_DATA_ID,
-    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID};
+    HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID,   HSTPF_FRAME_EST_THETA_DATA_ID,
+    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID, HSTPF_FRAME_HEALTH_TIME_DATA_ID};
 static const uint32_t out_cycle_ms[HSTPFD_N_OUTPUTS] = {
-    HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS, HSTPF_FRAME_EST_THETA_CYCLE_MS,
-    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS};
+    HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS,   HSTPF_FRAME_EST_THETA_CYCLE_MS,
+    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS, HSTPF_FRAME_HEALTH_TIME_CYCLE_MS};
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st)
 {
@@ -184,6 +185,16 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(count(v->jump));
         m.wrong_length = hstpf_frames_health_rx_wrong_length_raw(count(v->wrong_length));
         n = hstpf_can_health_rx_pack(f->data, &m, 8u);
+        break;
+    }
+    case 5: {
+        struct hstpf_can_health_time_t m;
+        (void)hstpf_can_health_time_init(&m);
+        m.clock_steps_fwd = hstpf_frames_health_time_clock_steps_fwd_raw(count(v->clock_fwd));
+        m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(count(v->clock_back));
+        m.late_positions = hstpf_frames_health_time_late_positions_raw(count(v->late));
+        m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(count(v->reacquire));
+        n = hstpf_can_health_time_pack(f->data, &m, 8u);
         break;
     }
     default: {

@@ -28,6 +28,7 @@ typedef struct {
     uint8_t accepted;       /* inputs: E2E accepted */
     uint8_t valid;          /* inputs: accepted and the sender's valid flag set */
     double value;           /* position m, or total traction force kN */
+    uint8_t counter;        /* inputs: the E2E alive counter (when accepted) */
     uint8_t has_fix_time;   /* position: the sender dated the fix (FixTimeValid) */
     uint16_t fix_time_ms;   /* position: fix time, ms modulo HSTPFD_FIX_WRAP_MS */
 } hstpfd_rx_t;
@@ -70,10 +71,11 @@ typedef struct {
     uint8_t pos_stale, trac_stale;
     uint32_t bad_crc, repeated, jump, wrong_length; /* summed over the inputs */
     uint32_t stale_events, unknown_id, error_frames, degeneracy;
+    uint32_t clock_fwd, clock_back, late, reacquire;
 } hstpfd_tx_values_t;
 
 /* Sender state: one E2E counter per output frame. */
-#define HSTPFD_N_OUTPUTS 5
+#define HSTPFD_N_OUTPUTS 6
 typedef struct {
     hstpf_e2e_tx_t e2e[HSTPFD_N_OUTPUTS];
 } hstpfd_tx_state_t;

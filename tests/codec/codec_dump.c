@@ -203,6 +203,26 @@ static void health_sys(double stale, double unk, double err, double deg)
            m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
 }
 
+static void health_time(double fwd, double back, double late, double reacq)
+{
+    struct hstpf_can_health_time_t m;
+    uint8_t f[8];
+    hstpf_can_health_time_init(&m);
+    m.clock_steps_fwd = hstpf_frames_health_time_clock_steps_fwd_raw(fwd);
+    m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(back);
+    m.late_positions = hstpf_frames_health_time_late_positions_raw(late);
+    m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(reacq);
+    hstpf_can_health_time_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_TIME_ID), f, 8);
+    hstpf_can_health_time_unpack(&m, f, 8);
+    head("HealthTime", HSTPF_FRAME_HEALTH_TIME_ID, f);
+    printf("\"in\":{\"ClockStepsFwd\":%.17g,\"ClockStepsBack\":%.17g,\"LatePositions\":%.17g,\"Reacquisitions\":%.17g},",
+           fwd, back, late, reacq);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
+           "\"Reacquisitions\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions);
+}
+
 static void encode_set(void)
 {
     size_t i;
@@ -237,6 +257,7 @@ static void encode_set(void)
     health_rx(1, 0, 17, 3, 4095, 1);
     health_sys(2, 0, 41, 4095);
     health_sys(0, 1, 0, 0);
+    health_time(1, 2, 37, 4095);
 }
 
 /* ---- decode side ---------------------------------------------------------- */
@@ -343,6 +364,14 @@ static int decode_line(const char *line)
                "\"CounterJump\":%u,\"WrongLength\":%u",
                m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.bad_crc, m.counter_repeat, m.counter_jump,
                m.wrong_length);
+        break;
+    }
+    case HSTPF_FRAME_HEALTH_TIME_ID: {
+        struct hstpf_can_health_time_t m;
+        hstpf_can_health_time_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
+               "\"Reacquisitions\":%u",
+               m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions);
         break;
     }
     default: {

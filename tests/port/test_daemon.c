@@ -2,6 +2,7 @@
  * a simulated run (the paper's model, tools/sim; frames packed with the
  * codec and E2E-protected), runs `hstpfd --log` on it as a process and
  * checks its JSON summary. POSIX (system(), wait status). */
+#define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -192,13 +193,13 @@ static void test_output_frames(void **state)
 {
     FILE *fp = fopen(DIR "/clean_out.log", "r");
     char line[256];
-    hstpf_e2e_rx_t rx[5];
-    int n[5] = {0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1;
-    static const uint32_t ids[5] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID, HSTPF_FRAME_EST_THETA_ID,
-                                    HSTPF_FRAME_HEALTH_RX_ID, HSTPF_FRAME_HEALTH_SYS_ID};
+    hstpf_e2e_rx_t rx[6];
+    int n[6] = {0, 0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1;
+    static const uint32_t ids[6] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID,  HSTPF_FRAME_EST_THETA_ID,
+                                    HSTPF_FRAME_HEALTH_RX_ID, HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID};
     (void)state;
     assert_non_null(fp);
-    for (i = 0; i < 5; ++i) {
+    for (i = 0; i < 6; ++i) {
         hstpf_e2e_rx_config_t c;
         (void)hstpf_e2e_rx_config_default(&c, hstpf_frame_find(ids[i])->data_id, 8);
         c.max_delta = 1;
@@ -208,9 +209,9 @@ static void test_output_frames(void **state)
     while (fgets(line, sizeof line, fp) != NULL) {
         hstpfd_frame_t f;
         assert_int_equal(hstpfd_candump_parse(line, &f, NULL, 0), HSTPFD_CANDUMP_OK);
-        for (i = 0; i < 5 && ids[i] != f.id; ++i) {
+        for (i = 0; i < 6 && ids[i] != f.id; ++i) {
         }
-        assert_true(i < 5);
+        assert_true(i < 6);
         assert_true(hstpf_e2e_accepted(hstpf_e2e_rx_check(&rx[i], f.data, f.len, (uint32_t)(f.t_us / 1000))));
         ++n[i];
         if (i == 1) {
@@ -223,7 +224,7 @@ static void test_output_frames(void **state)
     fclose(fp);
     /* 600 steps at 1 s: one state frame each; 1 Hz frames over 599.9 s */
     assert_int_equal(n[0], 600);
-    for (i = 1; i < 5; ++i) {
+    for (i = 1; i < 6; ++i) {
         assert_int_equal(n[i], 600);
     }
     assert_true(last_status == 1 || last_status == 2);
@@ -515,6 +516,172 @@ static void test_validity_csv(void **state)
     fclose(fr);
 }
 
+/* ---- time as a bounded resource (issue 11 item 3, issue 9 item 2) ---- */
+
+/* Copies log `in` to `out`, adding shift_us to the stamps of the frames at
+ * or after from_us (source time); with garbage_at_us > 0, one extra position
+ * frame stamped garbage_at_us + 1e6 s is written before the first frame at
+ * or after garbage_at_us (a garbage line). */
+static void shifted_log(const char *in, const char *out, int64_t from_us, int64_t shift_us, int64_t garbage_at_us)
+{
+    FILE *fi = fopen(in, "r"), *fo = fopen(out, "w");
+    char line[512], buf[512];
+    int garbage_done = garbage_at_us <= 0;
+    assert_non_null(fi);
+    assert_non_null(fo);
+    while (fgets(line, sizeof line, fi) != NULL) {
+        hstpfd_frame_t f;
+        if (hstpfd_candump_parse(line, &f, NULL, 0) != HSTPFD_CANDUMP_OK) {
+            continue;
+        }
+        if (!garbage_done && f.t_us >= GENLOG_T0_US + garbage_at_us && f.id == HSTPF_FRAME_POSITION_ID) {
+            hstpfd_frame_t g = f;
+            g.t_us += INT64_C(1000000000000);
+            assert_true(hstpfd_candump_format(&g, "vcan0", buf, sizeof buf) > 0);
+            fputs(buf, fo);
+            garbage_done = 1;
+        }
+        if (f.t_us >= GENLOG_T0_US + from_us) {
+            f.t_us += shift_us;
+        }
+        assert_true(hstpfd_candump_format(&f, "vcan0", buf, sizeof buf) > 0);
+        fputs(buf, fo);
+    }
+    fclose(fi);
+    fclose(fo);
+}
+
+#define S_US(x) ((int64_t)(x) * INT64_C(1000000))
+
+/* One garbage line stamped 1e6 s ahead: one step forward and one back, no
+ * predict steps across the jump, the run goes on. */
+static void test_clock_garbage_line(void **state)
+{
+    (void)state;
+    shifted_log(DIR "/clean.log", DIR "/garbage.log", S_US(10000), 0, S_US(300));
+    assert_int_equal(run("--log " DIR "/garbage.log " MODELS " --summary " DIR "/garbage.json > /dev/null"), 0);
+    read_file(DIR "/garbage.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "clock_steps_forward"), 1);
+    assert_int_equal((int)num("faults", "clock_steps_back"), 1);
+    assert_true(num(NULL, "predict_steps") <= 2.0);
+    assert_true(num(NULL, "steps") >= 598.0 && num(NULL, "steps") <= 601.0);
+    assert_true(num("scheduler", "reacquire") >= 1.0 && num("scheduler", "reacquire") <= 2.0);
+    /* the timeline moved by max_gap_s + 1 s at most, not by 1e6 s */
+    assert_true(num(NULL, "duration_s") < 600.0 + 601.0 + 1.0);
+    assert_true(is(NULL, "valid", "true"));
+}
+
+/* The receive clock steps 35 days forward at 300 s (before: 3 million
+ * predict steps): counted once, no predict steps, the estimate re-acquired. */
+static void test_clock_step_forward(void **state)
+{
+    (void)state;
+    shifted_log(DIR "/clean.log", DIR "/fwd.log", S_US(300), S_US(35 * 86400), 0);
+    assert_int_equal(run("--log " DIR "/fwd.log " MODELS " --summary " DIR "/fwd.json > /dev/null"), 0);
+    read_file(DIR "/fwd.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "clock_steps_forward"), 1);
+    assert_int_equal((int)num("faults", "clock_steps_back"), 0);
+    assert_int_equal((int)num(NULL, "predict_steps"), 0);
+    assert_int_equal((int)num("scheduler", "reacquire"), 1);
+    assert_true(num(NULL, "steps") >= 598.0);
+    assert_true(is(NULL, "valid", "true"));
+}
+
+/* +30 s at 300 s, below max_gap_s: only the fix times can tell it from a
+ * silence (receive times stay 30 s ahead of them): found 10 s of fix time
+ * later, counted, the fix clock follows and the estimate re-acquires. */
+static void test_clock_step_forward_by_fix_time(void **state)
+{
+    (void)state;
+    shifted_log(DIR "/clean.log", DIR "/fwd30.log", S_US(300), S_US(30), 0);
+    assert_int_equal(run("--log " DIR "/fwd30.log " MODELS " --summary " DIR "/fwd30.json > /dev/null"), 0);
+    read_file(DIR "/fwd30.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "clock_steps_forward"), 1);
+    assert_int_equal((int)num("scheduler", "fix_clock_steps"), 1);
+    assert_int_equal((int)num("scheduler", "reacquire"), 1);
+    /* predicted through the 30 s that seemed silent, then the fixes of the
+     * 10 s it took to see the step came too late to be used */
+    assert_true(num(NULL, "predict_steps") >= 29.0 && num(NULL, "predict_steps") <= 31.0);
+    assert_true(num("faults", "late_position") >= 90.0 && num("faults", "late_position") <= 110.0);
+    assert_true(is(NULL, "valid", "true"));
+}
+
+/* 300 s back at 300 s: counted, and the fixes after it are used, not
+ * dropped as decimated or late. */
+static void test_clock_step_back(void **state)
+{
+    (void)state;
+    shifted_log(DIR "/clean.log", DIR "/back.log", S_US(300), -S_US(300), 0);
+    assert_int_equal(run("--log " DIR "/back.log " MODELS " --summary " DIR "/back.json > /dev/null"), 0);
+    read_file(DIR "/back.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "clock_steps_back"), 1);
+    assert_int_equal((int)num("faults", "clock_steps_forward"), 0);
+    assert_true(num("faults", "late_position") <= 1.0);
+    /* as on the clean log: one step per second, 9 of 10 frames decimated */
+    assert_true(num(NULL, "steps") >= 598.0);
+    assert_true(num("scheduler", "decimated") <= 6000.0 - 598.0);
+    assert_int_equal((int)num("scheduler", "reacquire"), 1);
+}
+
+/* SIGTERM is honoured within 100 ms inside the longest loop: predict-only
+ * steps of 1 us (the smallest allowed) across a 500 s silence would be
+ * 5e8 steps; 1e-7 s is refused. */
+static void test_sigterm_in_predict_loop(void **state)
+{
+    FILE *fp;
+    char line[256];
+    double best = 1e9;
+    int attempt;
+    (void)state;
+    fp = fopen(DIR "/silence.log", "w");
+    assert_non_null(fp);
+    {
+        FILE *fi = fopen(DIR "/clean.log", "r");
+        int n = 0;
+        assert_non_null(fi);
+        while (fgets(line, sizeof line, fi) != NULL && n < 40) { /* 2 s of frames */
+            if (line[0] == '(') {
+                fputs(line, fp);
+                ++n;
+            }
+        }
+        fclose(fi);
+    }
+    fputs("(1700000500.000000) vcan0 101#0000000000000000\n", fp); /* 500 s later */
+    fclose(fp);
+    assert_int_equal(run("--log " DIR "/silence.log " MODELS " --predict-period-s 1e-7 2>/dev/null >/dev/null"), 2);
+    /* a loaded machine can delay the process itself: the best of 3 counts */
+    for (attempt = 0; attempt < 3 && best > 0.1; ++attempt) {
+        char cmd[2048];
+        double dt;
+        FILE *pp;
+        (void)snprintf(cmd, sizeof cmd,
+                       "'%s' --log " DIR "/silence.log " MODELS " --predict-period-s 1e-6 --summary " DIR
+                       "/sigterm.json >/dev/null & pid=$!; sleep 0.5; t0=$(date +%%s%%N); kill -TERM $pid; "
+                       "wait $pid; rc=$?; t1=$(date +%%s%%N); echo $rc $(( (t1 - t0) / 1000 ))",
+                       HSTPFD_BIN);
+        pp = popen(cmd, "r");
+        assert_non_null(pp);
+        assert_non_null(fgets(line, sizeof line, pp));
+        pclose(pp);
+        {
+            int rc = -1;
+            long us = -1;
+            assert_int_equal(sscanf(line, "%d %ld", &rc, &us), 2);
+            assert_int_equal(rc, 0);
+            dt = (double)us / 1e6;
+        }
+        print_message("SIGTERM to exit: %.1f ms\n", dt * 1e3);
+        if (dt < best) {
+            best = dt;
+        }
+        read_file(DIR "/sigterm.json", summary, sizeof summary);
+        assert_true(is(NULL, "end", "\"signal\""));
+        assert_true(num(NULL, "predict_steps") > 1000.0); /* it was in the loop */
+    }
+    assert_true(best <= 0.1);
+}
+
 /* SIGINT while reading: a clean exit with the summary, end "signal". */
 static void test_signal(void **state)
 {
@@ -564,6 +731,11 @@ int main(void)
         cmocka_unit_test(test_fix_time_under_jitter),
         cmocka_unit_test(test_validity_json_and_frames),
         cmocka_unit_test(test_validity_csv),
+        cmocka_unit_test(test_clock_garbage_line),
+        cmocka_unit_test(test_clock_step_forward),
+        cmocka_unit_test(test_clock_step_back),
+        cmocka_unit_test(test_clock_step_forward_by_fix_time),
+        cmocka_unit_test(test_sigterm_in_predict_loop),
         cmocka_unit_test(test_signal),
         cmocka_unit_test(test_bad_configuration),
     };

@@ -380,10 +380,14 @@ static void test_fix_time_dates_fixes(void **state)
     assert_int_equal(n_got, 11);
     assert_true(got[10].in.dt_s >= 0.1 && got[10].in.dt_s <= 0.1 + 1e-4);
     /* after an outage (not in sequence) the receive times count the wraps:
-     * 20 s later is 2 x 8192 + 3616 ms; in sequence it would read 3.616 s */
+     * 20 s later is 2 x 8192 + 3616 ms (3.616 s apart is too far for
+     * consecutive fixes, so even a fix flagged in sequence is unwrapped so) */
     hstpfd_sched_position_at(&s, T0 + S(29.0 + 0.03), 20.0, (29000) % 8192, 0);
     assert_int_equal(n_got, 12);
     assert_true(got[11].in.dt_s >= 20.0 && got[11].in.dt_s <= 20.0 + 20.1 * 1e-4);
+    hstpfd_sched_position_at(&s, T0 + S(49.0 + 0.03), 40.0, (49000) % 8192, 1);
+    assert_int_equal(n_got, 13);
+    assert_true(got[12].in.dt_s >= 20.0 && got[12].in.dt_s <= 20.0 + 20.1 * 1e-4);
 }
 
 /* A fix without a fix time is dated by its receive time (the fallback). */

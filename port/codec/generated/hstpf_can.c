@@ -1511,3 +1511,182 @@ bool hstpf_can_health_sys_degeneracy_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 4095.0));
 }
+
+int hstpf_can_health_time_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_health_time_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[2] |= pack_left_shift_u16(src_p->clock_steps_fwd, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u16(src_p->clock_steps_fwd, 8u, 0x0fu);
+    dst_p[3] |= pack_left_shift_u16(src_p->clock_steps_back, 4u, 0xf0u);
+    dst_p[4] |= pack_right_shift_u16(src_p->clock_steps_back, 4u, 0xffu);
+    dst_p[5] |= pack_left_shift_u16(src_p->late_positions, 0u, 0xffu);
+    dst_p[6] |= pack_right_shift_u16(src_p->late_positions, 8u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u16(src_p->reacquisitions, 4u, 0xf0u);
+    dst_p[7] |= pack_right_shift_u16(src_p->reacquisitions, 4u, 0xffu);
+
+    return (8);
+}
+
+int hstpf_can_health_time_unpack(
+    struct hstpf_can_health_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->clock_steps_fwd = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
+    dst_p->clock_steps_fwd |= unpack_left_shift_u16(src_p[3], 8u, 0x0fu);
+    dst_p->clock_steps_back = unpack_right_shift_u16(src_p[3], 4u, 0xf0u);
+    dst_p->clock_steps_back |= unpack_left_shift_u16(src_p[4], 4u, 0xffu);
+    dst_p->late_positions = unpack_right_shift_u16(src_p[5], 0u, 0xffu);
+    dst_p->late_positions |= unpack_left_shift_u16(src_p[6], 8u, 0x0fu);
+    dst_p->reacquisitions = unpack_right_shift_u16(src_p[6], 4u, 0xf0u);
+    dst_p->reacquisitions |= unpack_left_shift_u16(src_p[7], 4u, 0xffu);
+
+    return (0);
+}
+
+int hstpf_can_health_time_init(struct hstpf_can_health_time_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_health_time_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_health_time_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_health_time_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_health_time_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint16_t hstpf_can_health_time_clock_steps_fwd_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_clock_steps_fwd_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}
+
+uint16_t hstpf_can_health_time_clock_steps_back_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_clock_steps_back_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_health_time_clock_steps_back_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}
+
+uint16_t hstpf_can_health_time_late_positions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_late_positions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_late_positions_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_health_time_late_positions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}
+
+uint16_t hstpf_can_health_time_reacquisitions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_reacquisitions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}

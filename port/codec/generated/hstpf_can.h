@@ -52,6 +52,7 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_FRAME_ID (0x211u)
 #define HSTPF_CAN_HEALTH_RX_FRAME_ID (0x220u)
 #define HSTPF_CAN_HEALTH_SYS_FRAME_ID (0x221u)
+#define HSTPF_CAN_HEALTH_TIME_FRAME_ID (0x222u)
 
 /* Frame lengths in bytes. */
 #define HSTPF_CAN_POSITION_LENGTH (8u)
@@ -61,6 +62,7 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_RX_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_SYS_LENGTH (8u)
+#define HSTPF_CAN_HEALTH_TIME_LENGTH (8u)
 
 /* Extended or standard frame types. */
 #define HSTPF_CAN_POSITION_IS_EXTENDED (0)
@@ -70,6 +72,7 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_RX_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_SYS_IS_EXTENDED (0)
+#define HSTPF_CAN_HEALTH_TIME_IS_EXTENDED (0)
 
 /* Frame cycle times in milliseconds. */
 #define HSTPF_CAN_POSITION_CYCLE_TIME_MS (100u)
@@ -79,6 +82,7 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_RX_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_SYS_CYCLE_TIME_MS (1000u)
+#define HSTPF_CAN_HEALTH_TIME_CYCLE_TIME_MS (1000u)
 
 /* Signal choices. */
 #define HSTPF_CAN_POSITION_POS_VALID_INVALID_CHOICE (0u)
@@ -156,6 +160,7 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_NAME "EstTheta"
 #define HSTPF_CAN_HEALTH_RX_NAME "HealthRx"
 #define HSTPF_CAN_HEALTH_SYS_NAME "HealthSys"
+#define HSTPF_CAN_HEALTH_TIME_NAME "HealthTime"
 
 /* Signal Names. */
 #define HSTPF_CAN_POSITION_E2E_CRC_NAME "E2eCrc"
@@ -203,6 +208,12 @@ extern "C" {
 #define HSTPF_CAN_HEALTH_SYS_UNKNOWN_ID_NAME "UnknownId"
 #define HSTPF_CAN_HEALTH_SYS_ERROR_FRAMES_NAME "ErrorFrames"
 #define HSTPF_CAN_HEALTH_SYS_DEGENERACY_NAME "Degeneracy"
+#define HSTPF_CAN_HEALTH_TIME_E2E_CRC_NAME "E2eCrc"
+#define HSTPF_CAN_HEALTH_TIME_E2E_COUNTER_NAME "E2eCounter"
+#define HSTPF_CAN_HEALTH_TIME_CLOCK_STEPS_FWD_NAME "ClockStepsFwd"
+#define HSTPF_CAN_HEALTH_TIME_CLOCK_STEPS_BACK_NAME "ClockStepsBack"
+#define HSTPF_CAN_HEALTH_TIME_LATE_POSITIONS_NAME "LatePositions"
+#define HSTPF_CAN_HEALTH_TIME_REACQUISITIONS_NAME "Reacquisitions"
 
 /**
  * Signals in message Position.
@@ -646,6 +657,65 @@ struct hstpf_can_health_sys_t {
      * Offset: 0
      */
     uint16_t degeneracy;
+};
+
+/**
+ * Signals in message HealthTime.
+ *
+ * Receive-clock faults since start; each saturates at 4095. Cycle 1000 ms.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct hstpf_can_health_time_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_crc;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_counter;
+
+    /**
+     * Forward steps of the receive clock: a stamp more than max_gap_s after the latest, or receive times running ahead of the fixes' own times for 10 s.
+     *
+     * Range: 0..4095 (0..4095 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t clock_steps_fwd;
+
+    /**
+     * Backward steps of the receive clock: a stamp more than 1 s before the latest.
+     *
+     * Range: 0..4095 (0..4095 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t clock_steps_back;
+
+    /**
+     * Valid positions dropped because they were not newer than the last estimator step.
+     *
+     * Range: 0..4095 (0..4095 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t late_positions;
+
+    /**
+     * Times the daemon made the estimator re-acquire from the next fix (a gap beyond max_gap_s or a clock step).
+     *
+     * Range: 0..4095 (0..4095 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t reacquisitions;
 };
 
 /**
@@ -2706,6 +2776,283 @@ bool hstpf_can_health_sys_degeneracy_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_health_sys_degeneracy_is_in_phys_range(double value);
+
+/**
+ * Pack message HealthTime.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int hstpf_can_health_time_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_health_time_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message HealthTime.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int hstpf_can_health_time_unpack(
+    struct hstpf_can_health_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from HealthTime.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int hstpf_can_health_time_init(struct hstpf_can_health_time_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_e2e_crc_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_e2e_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_crc_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_e2e_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_e2e_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_clock_steps_fwd_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_clock_steps_fwd_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_clock_steps_back_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_clock_steps_back_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_back_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_late_positions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_late_positions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_late_positions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_late_positions_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_reacquisitions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_reacquisitions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value);
 
 
 #ifdef __cplusplus

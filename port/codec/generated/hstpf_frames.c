@@ -11,6 +11,7 @@ const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
     {0x211u, 0x2103u, 8u, 1000u, 3u, 5000u, "EstTheta"},
     {0x220u, 0x2104u, 8u, 1000u, 3u, 5000u, "HealthRx"},
     {0x221u, 0x2105u, 8u, 1000u, 3u, 5000u, "HealthSys"},
+    {0x222u, 0x2106u, 8u, 1000u, 3u, 5000u, "HealthTime"},
 };
 
 const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)
@@ -210,6 +211,26 @@ uint16_t hstpf_frames_health_sys_error_frames_raw(double phys)
 }
 
 uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_health_time_clock_steps_back_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_health_time_late_positions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys)
 {
     return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
 }

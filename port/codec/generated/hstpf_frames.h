@@ -18,7 +18,7 @@ extern "C" {
 #define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
 
 /** Number of frames in hstpf_frames[]. */
-#define HSTPF_FRAMES_COUNT 7u
+#define HSTPF_FRAMES_COUNT 8u
 
 /* Position: Measured train position along the run. */
 #define HSTPF_FRAME_POSITION_ID 0x100u
@@ -75,6 +75,14 @@ extern "C" {
 #define HSTPF_FRAME_HEALTH_SYS_CYCLE_MS 1000u
 #define HSTPF_FRAME_HEALTH_SYS_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_HEALTH_SYS_E2E_TIMEOUT_MS 5000u
+
+/* HealthTime: Receive-clock faults since start; each saturates at 4095. */
+#define HSTPF_FRAME_HEALTH_TIME_ID 0x222u
+#define HSTPF_FRAME_HEALTH_TIME_DATA_ID 0x2106u
+#define HSTPF_FRAME_HEALTH_TIME_LENGTH 8u
+#define HSTPF_FRAME_HEALTH_TIME_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_TIME_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_TIME_E2E_TIMEOUT_MS 5000u
 
 /** Position.FixTime wraps at this many ms: differences are taken modulo it. */
 #define HSTPF_FIX_TIME_WRAP_MS 8192u
@@ -169,6 +177,14 @@ uint16_t hstpf_frames_health_sys_unknown_id_raw(double phys);
 uint16_t hstpf_frames_health_sys_error_frames_raw(double phys);
 /** HealthSys.Degeneracy: scale 1, [0, 4095]. */
 uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys);
+/** HealthTime.ClockStepsFwd: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys);
+/** HealthTime.ClockStepsBack: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_health_time_clock_steps_back_raw(double phys);
+/** HealthTime.LatePositions: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_health_time_late_positions_raw(double phys);
+/** HealthTime.Reacquisitions: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys);
 
 #ifdef __cplusplus
 }
