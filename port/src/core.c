@@ -37,6 +37,8 @@ static const char *status_name(hstpf_status_t s)
         return "declared";
     case HSTPF_STATUS_CHANGED:
         return "changed";
+    case HSTPF_STATUS_WITHDRAWN:
+        return "withdrawn";
     default:
         return "undecided";
     }
@@ -135,7 +137,9 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
     if (out != NULL && cfg->out_format == HSTPFD_OUT_CSV) {
         static const char *const pre[2] = {"q_", "ess_"};
         int w;
-        fputs("t,k,dt,u,y,err,valid,pos,speed,c0,c1,c2,best,declared,status,pos_stale,trac_stale,restart", out);
+        fputs("t,k,dt,u,y,err,valid,pos,speed,pos_sd,speed_sd,standstill,acquisitions,c0,c1,c2,best,declared,status,"
+              "pos_stale,trac_stale,restart",
+              out);
         for (w = 0; w < 2; ++w) {
             for (l = 0; l < cfg->n_models; ++l) {
                 char col[HSTPFD_NAME_MAX + 8];
@@ -176,7 +180,7 @@ static int est_valid(const hstpfd_core_t *c)
     const hstpf_estimate_t *e = &c->est;
     uint16_t l;
     if (!c->have_fix || !lib_valid(e) || !isfinite(e->position_m) || fabs(e->position_m) > HSTPF_POS_MAX_M ||
-        !isfinite((double)e->speed_mps)) {
+        !isfinite((double)e->speed_mps) || !isfinite(e->position_sd_m) || !isfinite((double)e->speed_sd_mps)) {
         return 0;
     }
     for (l = 0; l < 3; ++l) {
@@ -202,6 +206,10 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->valid = (uint8_t)est_valid(c);
     v->position_m = e->position_m;
     v->speed_mps = (double)e->speed_mps;
+    v->position_sd_m = e->position_sd_m;
+    v->speed_sd_mps = (double)e->speed_sd_mps;
+    v->standstill = e->standstill;
+    v->acquisitions = e->acquisitions;
     v->status = e->status;
     /* a weight that is not finite names no type */
     if (e->declared >= 0 && e->declared < (int)e->n_models && isfinite((double)e->model[e->declared].q)) {
@@ -271,6 +279,9 @@ static void tx_service(hstpfd_core_t *c)
     unsigned i;
     for (i = 1; i < HSTPFD_N_OUTPUTS; ++i) {
         const int64_t cyc = hstpfd_tx_cycle_us(i);
+        if (i == HSTPFD_OUT_QUALITY) {
+            continue; /* goes with the state */
+        }
         if (c->t_now >= c->next_tx[i]) {
             transmit(c, i);
             c->next_tx[i] += cyc;
@@ -348,6 +359,14 @@ static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
     out_num(fp, csv, e->position_m, 9);
     out_key(fp, csv, "speed");
     out_num(fp, csv, (double)e->speed_mps, 9);
+    out_key(fp, csv, "pos_sd");
+    out_num(fp, csv, e->position_sd_m, 6);
+    out_key(fp, csv, "speed_sd");
+    out_num(fp, csv, (double)e->speed_sd_mps, 6);
+    out_key(fp, csv, "standstill");
+    fprintf(fp, "%u", (unsigned)e->standstill);
+    out_key(fp, csv, "acquisitions");
+    fprintf(fp, "%lu", (unsigned long)e->acquisitions);
     if (csv) {
         for (l = 0; l < 3; ++l) {
             fputc(',', fp);
@@ -469,6 +488,7 @@ void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
         c->state_sent = 1;
         c->last_state_tx = c->t_now;
         transmit(c, 0);
+        transmit(c, HSTPFD_OUT_QUALITY);
     }
 }
 
@@ -745,6 +765,12 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     json_num(fp, e->position_m);
     fputs(",\"speed_mps\":", fp);
     json_num(fp, (double)e->speed_mps);
+    fputs(",\"position_sd_m\":", fp);
+    json_num(fp, e->position_sd_m);
+    fputs(",\"speed_sd_mps\":", fp);
+    json_num(fp, (double)e->speed_sd_mps);
+    fprintf(fp, ",\"standstill\":%u,\"acquisitions\":%lu,\"nonfinite_resets\":%lu", (unsigned)e->standstill,
+            (unsigned long)e->acquisitions, (unsigned long)e->nonfinite_resets);
     fputs(",\"weights\":{", fp);
     for (l = 0; l < e->n_models; ++l) {
         if (l) {

@@ -86,13 +86,16 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
 
 static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID,  HSTPF_FRAME_EST_TYPE_ID,
                                                   HSTPF_FRAME_EST_THETA_ID,  HSTPF_FRAME_HEALTH_RX_ID,
-                                                  HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID};
+                                                  HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID,
+                                                  HSTPF_FRAME_EST_QUALITY_ID};
 static const uint16_t out_data_id[HSTPFD_N_OUTPUTS] = {
     HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID,   HSTPF_FRAME_EST_THETA_DATA_ID,
-    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID, HSTPF_FRAME_HEALTH_TIME_DATA_ID};
+    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID, HSTPF_FRAME_HEALTH_TIME_DATA_ID,
+    HSTPF_FRAME_EST_QUALITY_DATA_ID};
 static const uint32_t out_cycle_ms[HSTPFD_N_OUTPUTS] = {
     HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS,   HSTPF_FRAME_EST_THETA_CYCLE_MS,
-    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS, HSTPF_FRAME_HEALTH_TIME_CYCLE_MS};
+    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS, HSTPF_FRAME_HEALTH_TIME_CYCLE_MS,
+    HSTPF_FRAME_EST_QUALITY_CYCLE_MS};
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st)
 {
@@ -185,6 +188,20 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(count(v->jump));
         m.wrong_length = hstpf_frames_health_rx_wrong_length_raw(count(v->wrong_length));
         n = hstpf_can_health_rx_pack(f->data, &m, 8u);
+        break;
+    }
+    case HSTPFD_OUT_QUALITY: {
+        struct hstpf_can_est_quality_t m;
+        const int ok = hstpf_can_est_quality_position_sd_is_in_phys_range(v->position_sd_m) &&
+                       hstpf_can_est_quality_speed_sd_is_in_phys_range(v->speed_sd_mps);
+        (void)hstpf_can_est_quality_init(&m);
+        m.qual_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.qual_fault = (uint8_t)(v->have_fix && !ok);
+        m.standstill = v->standstill ? 1u : 0u;
+        m.position_sd = hstpf_frames_est_quality_position_sd_raw(v->have_fix ? v->position_sd_m : 0.0);
+        m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(v->have_fix ? v->speed_sd_mps : 0.0);
+        m.acquisitions = hstpf_frames_est_quality_acquisitions_raw(count(v->acquisitions));
+        n = hstpf_can_est_quality_pack(f->data, &m, 8u);
         break;
     }
     case 5: {

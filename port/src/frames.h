@@ -62,6 +62,9 @@ typedef struct {
     uint8_t valid;            /* the estimate is valid (core.c: est_valid) */
     double position_m;
     double speed_mps;
+    double position_sd_m, speed_sd_mps; /* blended posterior sd */
+    uint8_t standstill;
+    uint32_t acquisitions;
     hstpf_status_t status;
     int declared_row;         /* Table 1 row, -2 custom, -1 none */
     double declared_q;
@@ -75,14 +78,16 @@ typedef struct {
 } hstpfd_tx_values_t;
 
 /* Sender state: one E2E counter per output frame. */
-#define HSTPFD_N_OUTPUTS 6
+#define HSTPFD_N_OUTPUTS 7
+#define HSTPFD_OUT_QUALITY 6 /* EstQuality: sent with the state (output 0), not periodic */
 typedef struct {
     hstpf_e2e_tx_t e2e[HSTPFD_N_OUTPUTS];
 } hstpfd_tx_state_t;
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st);
-/* Cycle of output i, microseconds; its ID. Output 0 is the estimated state
- * (sent after a step, at most once per cycle), the others are periodic. */
+/* Cycle of output i, microseconds; its ID. Outputs 0 (the estimated state)
+ * and HSTPFD_OUT_QUALITY (its uncertainty) are sent after a step, at most
+ * once per cycle; the others are periodic. */
 int64_t hstpfd_tx_cycle_us(unsigned i);
 uint32_t hstpfd_tx_id(unsigned i);
 /* Packs and E2E-protects output i into f (t_us not set). Returns 0 or -1. */

@@ -203,6 +203,31 @@ static void health_sys(double stale, double unk, double err, double deg)
            m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
 }
 
+static void est_quality(double valid, double fault, double still, double psd, double vsd, double acq)
+{
+    struct hstpf_can_est_quality_t m;
+    uint8_t f[8];
+    hstpf_can_est_quality_init(&m);
+    m.qual_valid = hstpf_frames_est_quality_qual_valid_raw(valid);
+    m.qual_fault = hstpf_frames_est_quality_qual_fault_raw(fault);
+    m.standstill = hstpf_frames_est_quality_standstill_raw(still);
+    m.position_sd = hstpf_frames_est_quality_position_sd_raw(psd);
+    m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(vsd);
+    m.acquisitions = hstpf_frames_est_quality_acquisitions_raw(acq);
+    hstpf_can_est_quality_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_QUALITY_ID), f, 8);
+    hstpf_can_est_quality_unpack(&m, f, 8);
+    head("EstQuality", HSTPF_FRAME_EST_QUALITY_ID, f);
+    printf("\"in\":{\"QualValid\":%.17g,\"QualFault\":%.17g,\"Standstill\":%.17g,\"PositionSd\":%.17g,"
+           "\"SpeedSd\":%.17g,\"Acquisitions\":%.17g},",
+           valid, fault, still, psd, vsd, acq);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
+           "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"Acquisitions\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill,
+           hstpf_can_est_quality_position_sd_decode(m.position_sd), hstpf_can_est_quality_speed_sd_decode(m.speed_sd),
+           m.acquisitions);
+}
+
 static void health_time(double fwd, double back, double late, double reacq)
 {
     struct hstpf_can_health_time_t m;
@@ -258,6 +283,10 @@ static void encode_set(void)
     health_sys(2, 0, 41, 4095);
     health_sys(0, 1, 0, 0);
     health_time(1, 2, 37, 4095);
+    est_quality(1, 0, 0, 2.24, 0.22, 1);
+    est_quality(1, 0, 1, 0.0, 0.0, 3);
+    est_quality(0, 1, 0, 167772.15, 40.95, 4095);
+    est_type(3, 255, 0.0, 6, 0.42); /* withdrawn */
 }
 
 /* ---- decode side ---------------------------------------------------------- */
@@ -364,6 +393,16 @@ static int decode_line(const char *line)
                "\"CounterJump\":%u,\"WrongLength\":%u",
                m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.bad_crc, m.counter_repeat, m.counter_jump,
                m.wrong_length);
+        break;
+    }
+    case HSTPF_FRAME_EST_QUALITY_ID: {
+        struct hstpf_can_est_quality_t m;
+        hstpf_can_est_quality_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
+               "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"Acquisitions\":%u",
+               m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill,
+               hstpf_can_est_quality_position_sd_decode(m.position_sd),
+               hstpf_can_est_quality_speed_sd_decode(m.speed_sd), m.acquisitions);
         break;
     }
     case HSTPF_FRAME_HEALTH_TIME_ID: {

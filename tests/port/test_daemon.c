@@ -193,13 +193,14 @@ static void test_output_frames(void **state)
 {
     FILE *fp = fopen(DIR "/clean_out.log", "r");
     char line[256];
-    hstpf_e2e_rx_t rx[6];
-    int n[6] = {0, 0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1;
-    static const uint32_t ids[6] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID,  HSTPF_FRAME_EST_THETA_ID,
-                                    HSTPF_FRAME_HEALTH_RX_ID, HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID};
+    hstpf_e2e_rx_t rx[7];
+    int n[7] = {0, 0, 0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1;
+    static const uint32_t ids[7] = {HSTPF_FRAME_EST_STATE_ID,   HSTPF_FRAME_EST_TYPE_ID,    HSTPF_FRAME_EST_THETA_ID,
+                                    HSTPF_FRAME_HEALTH_RX_ID,   HSTPF_FRAME_HEALTH_SYS_ID,  HSTPF_FRAME_HEALTH_TIME_ID,
+                                    HSTPF_FRAME_EST_QUALITY_ID};
     (void)state;
     assert_non_null(fp);
-    for (i = 0; i < 6; ++i) {
+    for (i = 0; i < 7; ++i) {
         hstpf_e2e_rx_config_t c;
         (void)hstpf_e2e_rx_config_default(&c, hstpf_frame_find(ids[i])->data_id, 8);
         c.max_delta = 1;
@@ -209,9 +210,9 @@ static void test_output_frames(void **state)
     while (fgets(line, sizeof line, fp) != NULL) {
         hstpfd_frame_t f;
         assert_int_equal(hstpfd_candump_parse(line, &f, NULL, 0), HSTPFD_CANDUMP_OK);
-        for (i = 0; i < 6 && ids[i] != f.id; ++i) {
+        for (i = 0; i < 7 && ids[i] != f.id; ++i) {
         }
-        assert_true(i < 6);
+        assert_true(i < 7);
         assert_true(hstpf_e2e_accepted(hstpf_e2e_rx_check(&rx[i], f.data, f.len, (uint32_t)(f.t_us / 1000))));
         ++n[i];
         if (i == 1) {
@@ -224,7 +225,7 @@ static void test_output_frames(void **state)
     fclose(fp);
     /* 600 steps at 1 s: one state frame each; 1 Hz frames over 599.9 s */
     assert_int_equal(n[0], 600);
-    for (i = 1; i < 6; ++i) {
+    for (i = 1; i < 7; ++i) {
         assert_int_equal(n[i], 600);
     }
     assert_true(last_status == 1 || last_status == 2);
@@ -342,6 +343,10 @@ static void v_estimate(void)
     e->n_models = 3;
     e->position_m = 1234.5;
     e->speed_mps = 50.0f;
+    e->position_sd_m = 2.5;
+    e->speed_sd_mps = 0.25f;
+    e->standstill = 0;
+    e->acquisitions = 1;
     e->valid = 1;
     e->theta[0] = 0.79f;
     e->theta[1] = 0.0064f;
@@ -357,6 +362,8 @@ static void v_estimate(void)
 
 /* Publishes v_core.est (step line + state frame) and frame i; returns the
  * step line in line and the two frames decoded. */
+static hstpfd_frame_t v_quality; /* the EstQuality frame sent with the state */
+
 static void v_publish(FILE *out, FILE *fr, char *line, size_t size, unsigned i, hstpfd_frame_t *state,
                       hstpfd_frame_t *other)
 {
@@ -377,6 +384,9 @@ static void v_publish(FILE *out, FILE *fr, char *line, size_t size, unsigned i, 
     fseek(fr, at_fr, SEEK_SET);
     assert_non_null(fgets(buf, sizeof buf, fr));
     assert_int_equal(hstpfd_candump_parse(buf, state, NULL, 0), HSTPFD_CANDUMP_OK);
+    assert_non_null(fgets(buf, sizeof buf, fr));
+    assert_int_equal(hstpfd_candump_parse(buf, &v_quality, NULL, 0), HSTPFD_CANDUMP_OK);
+    assert_int_equal(v_quality.id, HSTPF_FRAME_EST_QUALITY_ID);
     assert_non_null(fgets(buf, sizeof buf, fr));
     assert_int_equal(hstpfd_candump_parse(buf, other, NULL, 0), HSTPFD_CANDUMP_OK);
     fseek(out, 0, SEEK_END);
@@ -410,6 +420,54 @@ static void test_validity_json_and_frames(void **state)
     assert_int_equal(hstpf_can_est_theta_unpack(&th, fo.data, fo.len), 0);
     assert_int_equal(th.theta_valid, 1);
     assert_int_equal(th.theta_saturated, 0);
+    assert_non_null(strstr(line, "\"pos_sd\":2.5,\"speed_sd\":0.25,\"standstill\":0,\"acquisitions\":1"));
+    {
+        struct hstpf_can_est_quality_t q;
+        assert_int_equal(hstpf_can_est_quality_unpack(&q, v_quality.data, v_quality.len), 0);
+        assert_int_equal(q.qual_valid, 1);
+        assert_int_equal(q.qual_fault, 0);
+        assert_int_equal(q.position_sd, 250u);
+        assert_int_equal(q.speed_sd, 25u);
+        assert_int_equal(q.acquisitions, 1u);
+    }
+
+    /* sd not finite / beyond EstQuality's range (167772.15 m) */
+    v_estimate();
+    v_core.est.speed_sd_mps = 0.0f / 0.0f;
+    v_core.est.standstill = 1;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_false(has_nonfinite_text(line));
+    assert_non_null(strstr(line, "\"valid\":false"));
+    assert_non_null(strstr(line, "\"speed_sd\":null,\"standstill\":1"));
+    {
+        struct hstpf_can_est_quality_t q;
+        assert_int_equal(hstpf_can_est_quality_unpack(&q, v_quality.data, v_quality.len), 0);
+        assert_int_equal(q.qual_valid, 0);
+        assert_int_equal(q.qual_fault, 1);
+        assert_int_equal(q.standstill, 1);
+    }
+    v_estimate();
+    v_core.est.position_sd_m = 2.0e5;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_non_null(strstr(line, "\"valid\":true"));
+    {
+        struct hstpf_can_est_quality_t q;
+        assert_int_equal(hstpf_can_est_quality_unpack(&q, v_quality.data, v_quality.len), 0);
+        assert_int_equal(q.qual_valid, 0);
+        assert_int_equal(q.qual_fault, 1);
+        assert_int_equal(q.position_sd, 16777215u);
+    }
+    assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
+    assert_int_equal(m.est_valid, 1); /* the state itself is fine */
+
+    /* status WITHDRAWN (3) goes out as such: TypeStatus has 2 bits */
+    v_estimate();
+    v_core.est.status = HSTPF_STATUS_WITHDRAWN;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    assert_non_null(strstr(line, "\"status\":\"withdrawn\""));
+    assert_int_equal(hstpf_can_est_type_unpack(&ty, fo.data, fo.len), 0);
+    assert_int_equal(ty.type_status, 3u);
+    assert_int_equal(ty.declared_type, 255u);
 
     /* NaN position (issue 11: it went out as a valid standing train) */
     v_estimate();
@@ -502,11 +560,11 @@ static void test_validity_csv(void **state)
     (void)state;
     v_start(&out, &fr, "csv");
     assert_non_null(fgets(line, sizeof line, (rewind(out), out)));
-    assert_int_equal(strncmp(line, "t,k,dt,u,y,err,valid,pos,speed,", 31), 0);
+    assert_int_equal(strncmp(line, "t,k,dt,u,y,err,valid,pos,speed,pos_sd,speed_sd,standstill,acquisitions,", 71), 0);
     fseek(out, 0, SEEK_END);
     v_estimate();
     v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
-    assert_non_null(strstr(line, ",,1,1234.5,50,")); /* err empty, valid 1 */
+    assert_non_null(strstr(line, ",,1,1234.5,50,2.5,0.25,0,1,")); /* err empty, valid 1 */
     v_estimate();
     v_core.est.position_m = 0.0 / 0.0;
     v_publish(out, fr, line, sizeof line, 1, &fs, &fo);

@@ -38,8 +38,10 @@ TYPE_CUSTOM = 254
 TYPE_NONE = 255
 
 POSITION, TRACTION = "Position", "Traction"
-EST_STATE, EST_TYPE, EST_THETA = "EstState", "EstType", "EstTheta"
-HEALTH_RX, HEALTH_SYS = "HealthRx", "HealthSys"
+EST_STATE, EST_QUALITY, EST_TYPE, EST_THETA = "EstState", "EstQuality", "EstType", "EstTheta"
+HEALTH_RX, HEALTH_SYS, HEALTH_TIME = "HealthRx", "HealthSys", "HealthTime"
+#: TypeStatus values (hstpf_status_t)
+STATUS_NAMES = ("undecided", "declared", "changed", "withdrawn")
 E2E_SIGNALS = ("E2eCrc", "E2eCounter")
 
 

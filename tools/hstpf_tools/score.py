@@ -22,8 +22,8 @@ from typing import Dict, List, Optional
 import numpy as np
 
 from . import e2e
-from .frames import (EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE,
-                     FrameCodec, type_name)
+from .frames import (EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS,
+                     HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE, FrameCodec, type_name)
 from .logio import read_log
 from .model import Theta
 
@@ -50,7 +50,8 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
 
 def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
     """Decoded output series with simulation times."""
-    series: Dict[str, List] = {EST_STATE: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [], HEALTH_SYS: []}
+    series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
+                               HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
     t_in: Optional[float] = None  # bus time of the latest matched input
     e2e_results: Dict[str, Dict[str, int]] = {}
@@ -81,7 +82,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
         if t is None:
             continue
-        if align == "inputs" and name == EST_STATE and t_in is not None and m.timestamp - t_in > max_age:
+        if align == "inputs" and name in (EST_STATE, EST_QUALITY) and t_in is not None and m.timestamp - t_in > max_age:
             continue
         series[name].append((t, sig))
     return series, e2e_results
@@ -133,11 +134,22 @@ def metrics(series, truth) -> dict:
         ev = spd - np.interp(t, tt, truth["speed_mps"])
         res.update(position_rms_m=float(np.sqrt(np.mean(ep**2))), speed_rms_mps=float(np.sqrt(np.mean(ev**2))),
                    state_frames=len(st))
+        # EstQuality goes out with each EstState: the 95 % intervals' coverage
+        qt = {t: s for t, s in series[EST_QUALITY] if s["QualValid"] >= 0.5}
+        both = [(i, qt[ti]) for i, ti in enumerate(t) if ti in qt]
+        if both:
+            idx = np.array([i for i, _ in both])
+            psd = np.array([q["PositionSd"] for _, q in both])
+            vsd = np.array([q["SpeedSd"] for _, q in both])
+            res["quality_frames"] = len(both)
+            res["position_95_coverage"] = float(np.mean(np.abs(ep[idx]) <= 1.96 * psd))
+            res["speed_95_coverage"] = float(np.mean(np.abs(ev[idx]) <= 1.96 * vsd))
+            res["position_sd_median_m"] = float(np.median(psd))
     ty = series[EST_TYPE]
     declared, decision = None, None
     if ty:
         last = int(ty[-1][1]["DeclaredType"])
-        res["final_status"] = ["undecided", "declared", "changed"][min(int(ty[-1][1]["TypeStatus"]), 2)]
+        res["final_status"] = STATUS_NAMES[min(int(ty[-1][1]["TypeStatus"]), len(STATUS_NAMES) - 1)]
         res["final_leader"] = type_name(int(ty[-1][1]["LeaderType"]))
         res["final_leader_weight"] = float(ty[-1][1]["LeaderWeight"])
         if last != TYPE_NONE:
@@ -163,7 +175,7 @@ def metrics(series, truth) -> dict:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
                 res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true), axis=0).tolist()
-    for name in (HEALTH_RX, HEALTH_SYS):
+    for name in (HEALTH_RX, HEALTH_SYS, HEALTH_TIME):
         if series[name]:
             s = series[name][-1][1]
             res.setdefault("health", {}).update({k: int(v) for k, v in s.items() if not k.startswith("E2e")})

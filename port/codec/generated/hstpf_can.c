@@ -704,6 +704,229 @@ bool hstpf_can_est_state_est_speed_is_in_phys_range(double value)
     return ((value >= -327.68) && (value <= 327.67));
 }
 
+int hstpf_can_est_quality_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_est_quality_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[1] |= pack_left_shift_u8(src_p->qual_valid, 4u, 0x10u);
+    dst_p[1] |= pack_left_shift_u8(src_p->qual_fault, 5u, 0x20u);
+    dst_p[1] |= pack_left_shift_u8(src_p->standstill, 6u, 0x40u);
+    dst_p[2] |= pack_left_shift_u32(src_p->position_sd, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->position_sd, 8u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(src_p->position_sd, 16u, 0xffu);
+    dst_p[5] |= pack_left_shift_u16(src_p->speed_sd, 0u, 0xffu);
+    dst_p[6] |= pack_right_shift_u16(src_p->speed_sd, 8u, 0x0fu);
+    dst_p[6] |= pack_left_shift_u16(src_p->acquisitions, 4u, 0xf0u);
+    dst_p[7] |= pack_right_shift_u16(src_p->acquisitions, 4u, 0xffu);
+
+    return (8);
+}
+
+int hstpf_can_est_quality_unpack(
+    struct hstpf_can_est_quality_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->qual_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->qual_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
+    dst_p->standstill = unpack_right_shift_u8(src_p[1], 6u, 0x40u);
+    dst_p->position_sd = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
+    dst_p->position_sd |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
+    dst_p->position_sd |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
+    dst_p->speed_sd = unpack_right_shift_u16(src_p[5], 0u, 0xffu);
+    dst_p->speed_sd |= unpack_left_shift_u16(src_p[6], 8u, 0x0fu);
+    dst_p->acquisitions = unpack_right_shift_u16(src_p[6], 4u, 0xf0u);
+    dst_p->acquisitions |= unpack_left_shift_u16(src_p[7], 4u, 0xffu);
+
+    return (0);
+}
+
+int hstpf_can_est_quality_init(struct hstpf_can_est_quality_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_est_quality_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_est_quality_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_est_quality_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_est_quality_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_est_quality_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint8_t hstpf_can_est_quality_qual_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_qual_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_qual_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_qual_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_quality_qual_fault_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_qual_fault_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_qual_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_qual_fault_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_quality_standstill_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_standstill_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_standstill_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_standstill_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint32_t hstpf_can_est_quality_position_sd_encode(double value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(round(value / 0.01)));
+}
+
+double hstpf_can_est_quality_position_sd_decode(uint32_t value)
+{
+    return ((double)value * 0.01);
+}
+
+bool hstpf_can_est_quality_position_sd_is_in_range(uint32_t value)
+{
+    return (value <= 16777215u);
+}
+
+bool hstpf_can_est_quality_position_sd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 167772.15));
+}
+
+uint16_t hstpf_can_est_quality_speed_sd_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.01)));
+}
+
+double hstpf_can_est_quality_speed_sd_decode(uint16_t value)
+{
+    return ((double)value * 0.01);
+}
+
+bool hstpf_can_est_quality_speed_sd_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_est_quality_speed_sd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 40.95));
+}
+
+uint16_t hstpf_can_est_quality_acquisitions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_acquisitions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_acquisitions_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_est_quality_acquisitions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}
+
 int hstpf_can_est_type_pack(
     uint8_t *dst_p,
     const struct hstpf_can_est_type_t *src_p,
@@ -813,12 +1036,12 @@ double hstpf_can_est_type_type_status_decode(uint8_t value)
 
 bool hstpf_can_est_type_type_status_is_in_range(uint8_t value)
 {
-    return (value <= 2u);
+    return (value <= 3u);
 }
 
 bool hstpf_can_est_type_type_status_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 2.0));
+    return ((value >= 0.0) && (value <= 3.0));
 }
 
 uint8_t hstpf_can_est_type_declared_type_encode(double value)

@@ -7,6 +7,7 @@ const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
     {0x100u, 0x1101u, 8u, 100u, 3u, 500u, "Position"},
     {0x101u, 0x1102u, 8u, 100u, 3u, 500u, "Traction"},
     {0x200u, 0x2101u, 8u, 100u, 3u, 5000u, "EstState"},
+    {0x201u, 0x2107u, 8u, 100u, 3u, 5000u, "EstQuality"},
     {0x210u, 0x2102u, 8u, 1000u, 3u, 5000u, "EstType"},
     {0x211u, 0x2103u, 8u, 1000u, 3u, 5000u, "EstTheta"},
     {0x220u, 0x2104u, 8u, 1000u, 3u, 5000u, "HealthRx"},
@@ -115,9 +116,39 @@ int16_t hstpf_frames_est_state_est_speed_raw(double phys)
     return (int16_t)raw_sat(phys, 0.01, 0.0, -32768.0, 32767.0);
 }
 
+uint8_t hstpf_frames_est_quality_qual_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_quality_qual_fault_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_quality_standstill_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint32_t hstpf_frames_est_quality_position_sd_raw(double phys)
+{
+    return (uint32_t)raw_sat(phys, 0.01, 0.0, 0.0, 16777215.0);
+}
+
+uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.01, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_est_quality_acquisitions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
 uint8_t hstpf_frames_est_type_type_status_raw(double phys)
 {
-    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 2.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
 }
 
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys)

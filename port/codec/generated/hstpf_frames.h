@@ -18,7 +18,7 @@ extern "C" {
 #define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
 
 /** Number of frames in hstpf_frames[]. */
-#define HSTPF_FRAMES_COUNT 8u
+#define HSTPF_FRAMES_COUNT 9u
 
 /* Position: Measured train position along the run. */
 #define HSTPF_FRAME_POSITION_ID 0x100u
@@ -43,6 +43,14 @@ extern "C" {
 #define HSTPF_FRAME_EST_STATE_CYCLE_MS 100u
 #define HSTPF_FRAME_EST_STATE_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_EST_STATE_E2E_TIMEOUT_MS 5000u
+
+/* EstQuality: Uncertainty of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, acquisitions. */
+#define HSTPF_FRAME_EST_QUALITY_ID 0x201u
+#define HSTPF_FRAME_EST_QUALITY_DATA_ID 0x2107u
+#define HSTPF_FRAME_EST_QUALITY_LENGTH 8u
+#define HSTPF_FRAME_EST_QUALITY_CYCLE_MS 100u
+#define HSTPF_FRAME_EST_QUALITY_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_QUALITY_E2E_TIMEOUT_MS 5000u
 
 /* EstType: Declared train type, its weight and status; current leader. */
 #define HSTPF_FRAME_EST_TYPE_ID 0x210u
@@ -137,7 +145,19 @@ uint8_t hstpf_frames_est_state_est_fault_raw(double phys);
 int32_t hstpf_frames_est_state_est_position_raw(double phys);
 /** EstState.EstSpeed: scale 0.01, [-327.68, 327.67] m/s. */
 int16_t hstpf_frames_est_state_est_speed_raw(double phys);
-/** EstType.TypeStatus: scale 1, [0, 2]. */
+/** EstQuality.QualValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_qual_valid_raw(double phys);
+/** EstQuality.QualFault: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_qual_fault_raw(double phys);
+/** EstQuality.Standstill: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_standstill_raw(double phys);
+/** EstQuality.PositionSd: scale 0.01, [0, 167772] m. */
+uint32_t hstpf_frames_est_quality_position_sd_raw(double phys);
+/** EstQuality.SpeedSd: scale 0.01, [0, 40.95] m/s. */
+uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys);
+/** EstQuality.Acquisitions: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_est_quality_acquisitions_raw(double phys);
+/** EstType.TypeStatus: scale 1, [0, 3]. */
 uint8_t hstpf_frames_est_type_type_status_raw(double phys);
 /** EstType.DeclaredType: scale 1, [0, 255]. */
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys);
