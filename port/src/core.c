@@ -155,13 +155,9 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
 
 /* ---- outputs ----------------------------------------------------------- */
 
-/* The library's lock and validity (hstpf_estimate_t.valid) and
- * hstpf_reacquire() are used once the library provides them (the API is in
- * the header; set to 1 when the implementation is merged). Until then the
- * daemon takes "has a fix" for the lock and restarts with hstpf_reset(). */
-#ifndef HSTPFD_LIB_LOCK_API
-#define HSTPFD_LIB_LOCK_API 0
-#endif
+
+/* The library fills position_sd_m / speed_sd_mps (with its lock API). */
+#define LIB_HAS_SD HSTPFD_LIB_LOCK_API
 
 static int lib_valid(const hstpf_estimate_t *e)
 {
@@ -208,6 +204,7 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->speed_mps = (double)e->speed_mps;
     v->position_sd_m = e->position_sd_m;
     v->speed_sd_mps = (double)e->speed_sd_mps;
+    v->sd_valid = (uint8_t)LIB_HAS_SD;
     v->standstill = e->standstill;
     v->acquisitions = e->acquisitions;
     v->status = e->status;
@@ -359,10 +356,10 @@ static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
     out_num(fp, csv, e->position_m, 9);
     out_key(fp, csv, "speed");
     out_num(fp, csv, (double)e->speed_mps, 9);
-    out_key(fp, csv, "pos_sd");
-    out_num(fp, csv, e->position_sd_m, 6);
+    out_key(fp, csv, "pos_sd"); /* null until the library provides it */
+    out_num(fp, csv, LIB_HAS_SD ? e->position_sd_m : HUGE_VAL, 6);
     out_key(fp, csv, "speed_sd");
-    out_num(fp, csv, (double)e->speed_sd_mps, 6);
+    out_num(fp, csv, LIB_HAS_SD ? (double)e->speed_sd_mps : HUGE_VAL, 6);
     out_key(fp, csv, "standstill");
     fprintf(fp, "%u", (unsigned)e->standstill);
     out_key(fp, csv, "acquisitions");
@@ -766,9 +763,9 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     fputs(",\"speed_mps\":", fp);
     json_num(fp, (double)e->speed_mps);
     fputs(",\"position_sd_m\":", fp);
-    json_num(fp, e->position_sd_m);
+    json_num(fp, LIB_HAS_SD ? e->position_sd_m : HUGE_VAL);
     fputs(",\"speed_sd_mps\":", fp);
-    json_num(fp, (double)e->speed_sd_mps);
+    json_num(fp, LIB_HAS_SD ? (double)e->speed_sd_mps : HUGE_VAL);
     fprintf(fp, ",\"standstill\":%u,\"acquisitions\":%lu,\"nonfinite_resets\":%lu", (unsigned)e->standstill,
             (unsigned long)e->acquisitions, (unsigned long)e->nonfinite_resets);
     fputs(",\"weights\":{", fp);

@@ -195,7 +195,7 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         const int ok = hstpf_can_est_quality_position_sd_is_in_phys_range(v->position_sd_m) &&
                        hstpf_can_est_quality_speed_sd_is_in_phys_range(v->speed_sd_mps);
         (void)hstpf_can_est_quality_init(&m);
-        m.qual_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.qual_valid = (uint8_t)(v->have_fix && v->valid && v->sd_valid && ok);
         m.qual_fault = (uint8_t)(v->have_fix && !ok);
         m.standstill = v->standstill ? 1u : 0u;
         m.position_sd = hstpf_frames_est_quality_position_sd_raw(v->have_fix ? v->position_sd_m : 0.0);

@@ -63,6 +63,7 @@ typedef struct {
     double position_m;
     double speed_mps;
     double position_sd_m, speed_sd_mps; /* blended posterior sd */
+    uint8_t sd_valid;                   /* the estimator provides them */
     uint8_t standstill;
     uint32_t acquisitions;
     hstpf_status_t status;

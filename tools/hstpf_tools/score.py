@@ -115,9 +115,9 @@ def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
         return out
     lat = (np.array(rx) - (a + b * fix_u)) / b  # ms of the fix clock
     lat -= np.min(lat)  # latency above the least one seen
-    out["rx_s_per_fix_s"] = float(b * 1000.0)
-    out["rx_latency_ms"] = {"p50": float(np.percentile(lat, 50)), "p99": float(np.percentile(lat, 99)),
-                            "max": float(np.max(lat))}
+    out["rx_s_per_fix_s"] = round(float(b * 1000.0), 9)
+    out["rx_latency_ms"] = {k: round(float(v), 3) for k, v in
+                            (("p50", np.percentile(lat, 50)), ("p99", np.percentile(lat, 99)), ("max", np.max(lat)))}
     return out
 
 
