@@ -130,3 +130,33 @@ def test_wrong_declaration_is_reported(sim, tmp_path):
     wt = CRH3[0] + CRH3[1] * V + CRH3[2] * V**2
     we = SS8[0] + SS8[1] * V + SS8[2] * V**2
     assert res["w_rms_rel_err"] == pytest.approx(np.sqrt(np.mean(((we - wt) / wt) ** 2)), rel=1e-3)
+
+
+def test_quality_frames_coverage(sim, tmp_path):
+    """EstQuality (position and speed sd, sent with each EstState): the
+    score's 95 % coverage is the share of steps whose error lies within
+    1.96 sd. The scripted errors are 1 m and 0.1 m/s; the position sd is
+    0.5 m (1.96 x 0.5 < 1: not covered) on even seconds and 1 m (covered)
+    on odd ones, the speed sd 0.1 m/s (always covered)."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for k in range(0, len(rows) - 1):
+        s, v = float(rows["position_m"][k]), float(rows["speed_mps"][k])
+        for fid, data in outputs(codec, float(k), s, v):
+            msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "PositionSd": 0.5 if k % 2 == 0 else 1.0,
+                                                "SpeedSd": 0.1, "Acquisitions": 1})
+        msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("HealthTime", {"ClockStepsFwd": 1, "Reacquisitions": 2})
+        msgs.append(message(float(k), fid, data))
+    rec = tmp_path / "q.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "q.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["quality_frames"] == res["state_frames"] == len(rows) - 1
+    assert res["position_95_coverage"] == pytest.approx(0.5, abs=1.0 / len(rows) + 1e-9)
+    assert res["speed_95_coverage"] == 1.0
+    assert res["position_sd_median_m"] == pytest.approx(0.75)
+    assert res["health"]["ClockStepsFwd"] == 1 and res["health"]["Reacquisitions"] == 2

@@ -27,6 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mass-t", type=float, help="train mass, t: converts traction_nkn to the frame's kN")
     p.add_argument("--t0", type=float, default=0.0, help="added to time_s for the log timestamps (0)")
     p.add_argument("--channel", default="vcan0")
+    p.add_argument("--no-fix-time", action="store_true", help="send positions without a fix time (an older sender)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     cli.add_json_argument(p, default=" (default: stdout, or stderr when -o is '-')")
     return p
@@ -66,7 +67,7 @@ def _main(argv) -> int:
         col = "traction_nkn"
     else:
         raise bad("need a force_kn or traction_nkn column")
-    times, pos, force, pv, tv = [], [], [], [], []
+    times, pos, force, pv, tv, fix = [], [], [], [], [], []
     last_t = -math.inf
     for i, r in enumerate(rows, start=2):
         t = _num(r["time_s"])
@@ -79,11 +80,12 @@ def _main(argv) -> int:
         force.append(conv(u) if u is not None else 0.0)
         pv.append(y is not None)
         tv.append(u is not None)
+        fix.append(_num(r["fix_time_s"]) if "fix_time_s" in cols else a.t0 + t)
     try:
         codec = FrameCodec(a.dbc)
     except Exception as exc:  # missing or unreadable DBC
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
-    msgs = input_frames(codec, a.t0, times, pos, force, a.channel, pv, tv)
+    msgs = input_frames(codec, a.t0, times, pos, force, a.channel, pv, tv, fix, not a.no_fix_time)
     try:
         if a.out != "-":
             Path(a.out).parent.mkdir(parents=True, exist_ok=True)

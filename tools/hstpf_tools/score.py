@@ -24,8 +24,8 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from . import cli, e2e, runconfig
-from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
-                     type_name)
+from .frames import (EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS,
+                     HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE, FrameCodec, type_name)
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
@@ -53,7 +53,8 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
 
 def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
     """Decoded output series with simulation times."""
-    series: Dict[str, List] = {EST_STATE: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [], HEALTH_SYS: []}
+    series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
+                               HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
     t_in: Optional[float] = None  # bus time of the latest matched input
     e2e_results: Dict[str, Dict[str, int]] = {}
@@ -86,10 +87,43 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
         if t is None:
             continue
-        if align == "inputs" and name == EST_STATE and t_in is not None and m.timestamp - t_in > max_age:
+        if align == "inputs" and name in (EST_STATE, EST_QUALITY) and t_in is not None and m.timestamp - t_in > max_age:
             continue
         series[name].append((t, sig))
     return series, e2e_results
+
+
+def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
+    """The recorded position frames' fix times (Position.FixTime) against
+    their receive stamps: how many carry one, the rate of the receive clock
+    per fix-clock second (1 / replay speed) and the receive jitter, in ms of
+    the fix clock (the error a receiver that dates fixes on receipt makes).
+    Only E2E-accepted frames count."""
+    codec = FrameCodec(dbc, timeout_s=math.inf)
+    pos_id = codec.message(POSITION).frame_id
+    rx, fix = [], []
+    for m in rec_msgs:
+        if m.arbitration_id != pos_id or m.is_error_frame:
+            continue
+        _, sig, _ = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
+        if sig is not None and sig.get("FixTimeValid", 0) >= 0.5 and sig["PosValid"] >= 0.5:
+            rx.append(m.timestamp)
+            fix.append(int(sig["FixTime"]))
+    out: dict = {"fix_time_frames": len(fix)}
+    if len(fix) < 3:
+        return out
+    d = np.diff(np.array(fix, dtype=np.int64)) % FIX_TIME_WRAP_MS
+    d = np.where(d > FIX_TIME_WRAP_MS // 2, d - FIX_TIME_WRAP_MS, d)  # consecutive fixes: within half a wrap
+    fix_u = np.concatenate(([0], np.cumsum(d))).astype(float)  # ms
+    b, a = np.polyfit(fix_u, np.array(rx), 1)
+    if not b > 0:
+        return out
+    lat = (np.array(rx) - (a + b * fix_u)) / b  # ms of the fix clock
+    lat -= np.min(lat)  # latency above the least one seen
+    out["rx_s_per_fix_s"] = round(float(b * 1000.0), 9)
+    out["rx_latency_ms"] = {k: round(float(v), 3) for k, v in
+                            (("p50", np.percentile(lat, 50)), ("p99", np.percentile(lat, 99)), ("max", np.max(lat)))}
+    return out
 
 
 def metrics(series, truth) -> dict:
@@ -105,11 +139,22 @@ def metrics(series, truth) -> dict:
         ev = spd - np.interp(t, tt, truth["speed_mps"])
         res.update(position_rms_m=float(np.sqrt(np.mean(ep**2))), speed_rms_mps=float(np.sqrt(np.mean(ev**2))),
                    state_frames=len(st))
+        # EstQuality goes out with each EstState: the 95 % intervals' coverage
+        qt = {t: s for t, s in series[EST_QUALITY] if s["QualValid"] >= 0.5}
+        both = [(i, qt[ti]) for i, ti in enumerate(t) if ti in qt]
+        if both:
+            idx = np.array([i for i, _ in both])
+            psd = np.array([q["PositionSd"] for _, q in both])
+            vsd = np.array([q["SpeedSd"] for _, q in both])
+            res["quality_frames"] = len(both)
+            res["position_95_coverage"] = float(np.mean(np.abs(ep[idx]) <= 1.96 * psd))
+            res["speed_95_coverage"] = float(np.mean(np.abs(ev[idx]) <= 1.96 * vsd))
+            res["position_sd_median_m"] = float(np.median(psd))
     ty = series[EST_TYPE]
     declared, decision = None, None
     if ty:
         last = int(ty[-1][1]["DeclaredType"])
-        res["final_status"] = ["undecided", "declared", "changed"][min(int(ty[-1][1]["TypeStatus"]), 2)]
+        res["final_status"] = STATUS_NAMES[min(int(ty[-1][1]["TypeStatus"]), len(STATUS_NAMES) - 1)]
         res["final_leader"] = type_name(int(ty[-1][1]["LeaderType"]))
         res["final_leader_weight"] = float(ty[-1][1]["LeaderWeight"])
         if last != TYPE_NONE:
@@ -135,7 +180,7 @@ def metrics(series, truth) -> dict:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
                 res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true), axis=0).tolist()
-    for name in (HEALTH_RX, HEALTH_SYS):
+    for name in (HEALTH_RX, HEALTH_SYS, HEALTH_TIME):
         if series[name]:
             s = series[name][-1][1]
             res.setdefault("health", {}).update({k: int(v) for k, v in s.items() if not k.startswith("E2e")})
@@ -339,6 +384,7 @@ def _main(argv) -> int:
         raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
     series, e2e_res = collect(cli.load_log(a.log), codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
+    res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
     res["output_e2e"] = e2e_res
     res["frames"] = {k: len(v) for k, v in series.items()}
@@ -351,10 +397,12 @@ def _main(argv) -> int:
             raise cli.output_error(a.plots, exc) from exc
     table = sys.stderr if a.json == "-" else sys.stdout  # '--json -': nothing but JSON on stdout
     for k, v in res.items():
-        if k not in ("output_e2e", "health", "frames"):
+        if k not in ("output_e2e", "health", "frames", "inputs"):
             print(f"{k:38s} {_fmt(v)}", file=table)
     if "health" in res:
         print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()), file=table)
+    if "inputs" in res:
+        print("inputs".ljust(38), json.dumps(res["inputs"]), file=table)
     bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
     print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}), file=table)
     if a.json:

@@ -18,7 +18,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate the train model and write E2E-protected position and traction frames "
         "(candump log) and the ground truth (CSV). Model step T on a grid; frames every "
         "--frame-period: position interpolated linearly between grid points plus fresh noise e, "
-        "traction held over each step. Prints a JSON report.",
+        "traction held over each step. Each position frame carries its fix time (Position.FixTime): "
+        "--t0 + the frame's simulation time, ms modulo 8192. Prints a JSON report.",
         epilog="Exit codes: 0 done, 2 usage, 3 an input file (--track, --dbc) cannot be read, 6 an output "
         "cannot be written (docs/tools.md).",
     )
@@ -40,6 +41,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gamma", type=float, default=0.06, help="rotating-mass factor (0.06)")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0, s (0)")
     p.add_argument("--channel", default="vcan0", help="channel name written in the log (vcan0)")
+    p.add_argument("--no-fix-time", action="store_true",
+                   help="position frames without their fix time (an older sender: the receiver dates them on receipt)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     p.add_argument("-o", "--out", default="run.log", help="candump log to write (run.log); '-': stdout")
     p.add_argument("--truth", help="truth CSV (default: <out stem>_truth.csv; needed with -o -); '-': stdout")
@@ -103,7 +106,7 @@ def _main(argv) -> int:
     rng_proc, rng_meas = (np.random.default_rng(s) for s in ss.spawn(2))
     run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma)
     tf, y, u = model.sample_frames(run, a.frame_period, e, rng_meas, a.traction_noise_sd)
-    msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel)
+    msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel, fix_time=not a.no_fix_time)
     try:
         if a.out != "-":
             Path(a.out).parent.mkdir(parents=True, exist_ok=True)
