@@ -382,7 +382,8 @@ def _main(argv) -> int:
         truth = read_truth(a.truth)
     except (KeyError, ValueError, IndexError) as exc:
         raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
-    series, e2e_res = collect(cli.load_log(a.log), codec, align, input_map, a.t0, a.speed)
+    rec = cli.load_log(a.log)
+    series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
     res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
