@@ -57,6 +57,7 @@ stage() {
   rc=$?
   if [ "$rc" -eq 0 ]; then
     printf 'ok      %6s  %s\n' "$(fmt_time $(( $(date +%s) - t0 )))" "$(tail -1 "$logs/$name.log")"
+    sed -n 's/^note: /             /p' "$logs/$name.log"
     passed+=("$name")
   elif [ "$rc" -eq 77 ]; then
     printf 'SKIPPED %6s  %s\n' "$(fmt_time $(( $(date +%s) - t0 )))" "$(tail -1 "$logs/$name.log")"
@@ -75,7 +76,7 @@ ctest_summary() {
   shift
   local known
   known=$(ctest --test-dir "$dir" -N -L 'known-' "$@" 2>/dev/null | sed -n 's/^ *Test *#[0-9]*: //p' | tr '\n' ' ')
-  [ -n "$known" ] && echo "known failures (expected to fail, flip when they pass): $known"
+  [ -n "$known" ] && echo "note: known failures (expected to fail; flip when one passes): $known"
   return 0
 }
 
