@@ -7,12 +7,12 @@
 #               the coverage stage)
 #   sanitizers  ASan + UBSan (with float-cast-overflow) build, ctest
 #   python      the Python tests
-#   hil         hstpfd on vcan0 replaying a run (natively or in the VM)
 #   gates       gcc and clang, C99 and C11, lib/ with -m32, all -Werror
 #   coverage    --coverage build, ctest with the VM test (socketcan.c),
 #               branch coverage of lib/ and port/src/ against the floors
 #   fuzz        each libFuzzer target for HSTPF_FUZZ_SECONDS (default 60)
 #               under ASan + UBSan with float-cast-overflow (clang)
+#   hil         hstpfd on vcan0 replaying a run (natively or in the VM)
 #
 # Known failures (ctest labels known-limitation / known-failure) are tests
 # expected to fail; they are listed by name after the host stage and turn
@@ -146,8 +146,8 @@ fuzz() {
 stage host host
 stage sanitizers sanitizers
 stage python python_tests
-stage hil hil
 stage gates gates
 stage coverage coverage
 stage fuzz fuzz
+stage hil hil # last: the longest, and the most sensitive to a loaded machine
 exit 0
