@@ -4,6 +4,7 @@
  *   (1700000000.123456) vcan0 12345678#00 R        python-can adds R/T
  *   (1700000000.123456) vcan0 123##1DEADBEEF       CAN FD, flags digit
  *   (1700000000.123456) vcan0 123#R                remote request
+ *   (1700000000.123456) vcan0 123#R4               remote request for 4 bytes
  *   (1700000000.123456) vcan0 20000080#0000000000000000   error frame
  *
  * Portable C99. */

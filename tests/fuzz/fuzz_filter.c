@@ -155,7 +155,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     FUZZ_CHECK(hstpf_estimate(&filt, &est) == HSTPF_OK, "estimate after init");
     check_estimate(&est, cfg.n_models);
 
-    for (steps = 0; steps < 300u && in.i < in.n; ++steps) {
+    for (steps = 0; steps < 4000u && in.i < in.n; ++steps) {
         hstpf_input_t u;
         const uint8_t op = fuzz_u8(&in);
         if (op == 0xFFu) {

@@ -206,6 +206,80 @@ static void test_sniff(void **state)
     }
 }
 
+/* Every buffer too short for a line is refused, never overrun; the rarer
+ * spellings and errors of the reader. */
+static void test_sizes_and_spellings(void **state)
+{
+    static const char *const lines[] = {"(1.000000) vcan0 123#DEADBEEF\n", "(1.000000) vcan0 123##0" "0011223344556677"
+                                                                          "8899AABB\n",
+                                        "(1.000000) vcan0 20000004#R\n", "(1.000000) vcan0 123#R8\n"};
+    char buf[256], part[256], ifc[4];
+    hstpfd_frame_t f;
+    size_t i;
+    int n, k;
+    (void)state;
+    for (i = 0; i < sizeof lines / sizeof lines[0]; ++i) {
+        assert_int_equal(hstpfd_candump_parse(lines[i], &f, NULL, 0), HSTPFD_CANDUMP_OK);
+        n = hstpfd_candump_format(&f, "vcan0", buf, sizeof buf);
+        assert_int_equal(n, (int)strlen(lines[i]));
+        for (k = 0; k <= n; ++k) {
+            memset(part, 'Z', sizeof part);
+            assert_int_equal(hstpfd_candump_format(&f, "vcan0", part, (size_t)k), -1);
+            assert_true(part[k] == 'Z');
+        }
+    }
+    /* lower-case hex, 'r' and 't', tabs and other blanks, a short interface buffer */
+    assert_int_equal(hstpfd_candump_parse("\t(2.5)\vcan_long_name\f1ab#deadbeef\tt\r\n", &f, ifc, sizeof ifc),
+                     HSTPFD_CANDUMP_OK);
+    assert_int_equal(f.id, 0x1AB);
+    assert_int_equal(f.data[3], 0xEF);
+    assert_string_equal(ifc, "can");
+    assert_int_equal(hstpfd_candump_parse("(2.5) vcan0 1ab#r r", &f, ifc, 0), HSTPFD_CANDUMP_OK);
+    assert_int_equal(f.flags, HSTPFD_FRAME_RTR);
+    {
+        static const char *const bad[] = {
+            "(1234567890123.0) vcan0 123#00", /* 13 digits of seconds */
+            "(1.0) vcan0 123##G0",            /* bad FD flags digit */
+            "(1.0) vcan0 123#00_G",           /* bad len8_dlc digit */
+            "(1.0) vcan0 123#R9",             /* RTR length above 8 */
+            "(1.0) vcan0 123#00 r x",         /* junk after the direction */
+            "(1.0) vcan0 123#00 Rx",          /* no blank after the direction */
+            "(1.0) vcan0 G23#00",             /* no hex id */
+            "(1.0) vcan0 123##",              /* FD without its flags digit */
+            "(1.0) vcan0 123##1" "001122334455667788", /* 9 bytes: no FD length */
+        };
+        for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+            if (hstpfd_candump_parse(bad[i], &f, NULL, 0) != HSTPFD_CANDUMP_BAD) {
+                fail_msg("accepted: %s", bad[i]);
+            }
+        }
+    }
+    assert_int_equal(hstpfd_candump_parse("(1.0) vcan0 123#00", NULL, NULL, 0), HSTPFD_CANDUMP_BAD);
+    /* a negative time (a frame built by hand) is written with a negative second */
+    memset(&f, 0, sizeof f);
+    f.t_us = -1500000;
+    f.id = 0x10;
+    n = hstpfd_candump_format(&f, "c", buf, sizeof buf);
+    assert_string_equal(buf, "(-2.500000) c 010#\n");
+    assert_int_equal(n, (int)strlen(buf));
+}
+
+/* The sniffer on heads that end mid-line, lines too long for a frame, and
+ * without a message buffer. */
+static void test_sniff_edges(void **state)
+{
+    static char head[HSTPFD_CANDUMP_SNIFF_BYTES];
+    char msg[256];
+    (void)state;
+    memset(head, 'x', sizeof head); /* one line longer than the head: not judged */
+    assert_int_equal(hstpfd_candump_sniff(head, sizeof head, "x", msg, sizeof msg), 0);
+    head[300] = '\n'; /* a 300-byte line, then the cut one */
+    assert_int_equal(hstpfd_candump_sniff(head, sizeof head, "x", msg, sizeof msg), -1);
+    assert_int_equal(hstpfd_candump_sniff(head, sizeof head, "x", NULL, 0), -1);
+    assert_int_equal(hstpfd_candump_sniff("LOG", 3, "x", msg, sizeof msg), -1); /* too short for a magic */
+    assert_non_null(strstr(msg, "unknown"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -215,6 +289,8 @@ int main(void)
         cmocka_unit_test(test_skip_and_bad),
         cmocka_unit_test(test_format_roundtrip),
         cmocka_unit_test(test_sniff),
+        cmocka_unit_test(test_sizes_and_spellings),
+        cmocka_unit_test(test_sniff_edges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

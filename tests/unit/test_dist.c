@@ -1078,6 +1078,13 @@ static void test_blur_bounded(void **state)
     assert_int_equal(hstpf__dist_blur(&d, &s, 1e-30), HSTPF_E_DIST);
     assert_int_equal(hstpf__dist_blur(&d, &s, NAN), HSTPF_E_DIST);
     assert_int_equal(hstpf__dist_blur(&d, &s, INFINITY), HSTPF_E_DIST);
+    s.scale = -1.0; /* an invalid Gamma is refused by the blur as by init */
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.1), HSTPF_E_DIST);
+    /* its own floor depth */
+    s.scale = 0.2;
+    s.floor_depth = 12.0;
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.1), HSTPF_OK);
+    TU_CLOSE(d.floor, (double)d.lp_max - 12.0, 1e-4);
 }
 
 static int setup(void **state)
