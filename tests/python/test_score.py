@@ -203,3 +203,31 @@ def test_est_time_dates_late_outputs(sim, tmp_path, dated):
     else:
         assert res["state_frames_dated"] == 0
         assert res["position_rms_m"] > 5.0  # 0.7 s of travel at up to ~60 m/s
+
+
+def test_est_time_after_the_latest_input(sim, tmp_path):
+    """A predict-only step can end after the latest position seen (the
+    positions are late): EstTime then lies ahead of that input's FixTime and
+    is dated ahead of it, not a wrap (8.192 s) earlier."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for m in read_log(str(log)):
+        msgs.append(message(m.timestamp, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id != 0x100 or abs(m.timestamp - round(m.timestamp)) > 1e-6:
+            continue
+        _, sig, _ = FrameCodec().decode(0x100, bytes(m.data), check=False)
+        ts = m.timestamp + 0.5  # predicted half a second past this fix
+        s = np.interp(ts, rows["time_s"], rows["position_m"])
+        v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(m.timestamp + 0.0001, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1, "EstTime": (sig["FixTime"] + 500) % 8192})
+        msgs.append(message(m.timestamp + 0.0002, fid, data))
+    rec = tmp_path / "ahead.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "ahead.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] >= res["state_frames"] > 300  # the last one, at 400.5 s, is past the truth
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)

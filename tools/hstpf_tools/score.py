@@ -100,9 +100,13 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
         if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
                 and t_sim is not None:
-            # the estimate's own time, on the fix clock: the latest time with
-            # that FixTime at or before the latest input
-            t_est = t_sim - ((fix_in - int(sig["EstTime"])) % FIX_TIME_WRAP_MS) / 1000.0
+            # the estimate's own time, on the fix clock: the time with that
+            # FixTime nearest the latest input (a predict-only step may end
+            # after it; an estimator may lag it): within half a wrap
+            d = (fix_in - int(sig["EstTime"])) % FIX_TIME_WRAP_MS
+            if d > FIX_TIME_WRAP_MS // 2:
+                d -= FIX_TIME_WRAP_MS
+            t_est = t_sim - d / 1000.0
             if pending is not None:
                 series[EST_STATE].append((t_est, pending[2]))
                 n_dated += 1
