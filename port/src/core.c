@@ -207,6 +207,13 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->sd_valid = (uint8_t)LIB_HAS_SD;
     v->standstill = e->standstill;
     v->acquisitions = e->acquisitions;
+    if (c->sched.have_fix && c->have_est_t) {
+        /* the step's end on the fix clock: the inverse of the fix clock's mapping */
+        const int64_t ms = (c->est_t_us - c->sched.fix_off) / 1000;
+        const int64_t w = (int64_t)HSTPFD_FIX_WRAP_MS;
+        v->est_time_valid = 1;
+        v->est_time_ms = (uint16_t)(((ms % w) + w) % w);
+    }
     v->status = e->status;
     /* a weight that is not finite names no type */
     if (e->declared >= 0 && e->declared < (int)e->n_models && isfinite((double)e->model[e->declared].q)) {
@@ -479,6 +486,8 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
 
 void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 {
+    c->est_t_us = st->t_us;
+    c->have_est_t = 1;
     write_step(c, st, rc);
     /* the estimated state goes out after a step, at most once per cycle */
     if (!c->state_sent || c->t_now - c->last_state_tx >= hstpfd_tx_cycle_us(0) - hstpfd_tx_cycle_us(0) / 50) {
@@ -835,7 +844,6 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "decimated", (unsigned long)s->decimated, 1);
     kv(fp, "split", (unsigned long)s->split, 0);
     kv(fp, "fix_dated", (unsigned long)s->fix_dated, 0);
-    kv(fp, "fix_clock_steps", (unsigned long)s->fix_clock_steps, 0);
     kv(fp, "reacquire", (unsigned long)c->n.reacquire, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);

@@ -70,6 +70,8 @@ typedef struct {
     uint8_t had_fix;       /* t_first_fix is set */
     uint8_t have_decision; /* decision_t is set */
     int64_t t_first_fix;
+    uint8_t have_est_t;    /* est_t_us is set */
+    int64_t est_t_us;      /* timeline time of the published estimate (its step's end) */
     int16_t declared_prev;
     int64_t decision_t;    /* frame time of the step that declared the current type */
     uint32_t floor_prev[HSTPF_MAX_MODELS];

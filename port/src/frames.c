@@ -200,7 +200,8 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.standstill = v->standstill ? 1u : 0u;
         m.position_sd = hstpf_frames_est_quality_position_sd_raw(v->have_fix ? v->position_sd_m : 0.0);
         m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(v->have_fix ? v->speed_sd_mps : 0.0);
-        m.acquisitions = hstpf_frames_est_quality_acquisitions_raw(count(v->acquisitions));
+        m.est_time_valid = v->est_time_valid ? 1u : 0u;
+        m.est_time = (uint16_t)(v->est_time_valid ? v->est_time_ms % HSTPF_FIX_TIME_WRAP_MS : 0u);
         n = hstpf_can_est_quality_pack(f->data, &m, 8u);
         break;
     }
@@ -211,6 +212,7 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(count(v->clock_back));
         m.late_positions = hstpf_frames_health_time_late_positions_raw(count(v->late));
         m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(count(v->reacquire));
+        m.acquisitions = hstpf_frames_health_time_acquisitions_raw(count(v->acquisitions));
         n = hstpf_can_health_time_pack(f->data, &m, 8u);
         break;
     }

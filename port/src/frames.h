@@ -66,6 +66,8 @@ typedef struct {
     uint8_t sd_valid;                   /* the estimator provides them */
     uint8_t standstill;
     uint32_t acquisitions;
+    uint8_t est_time_valid;   /* est_time_ms is known */
+    uint16_t est_time_ms;     /* the estimate's time on the fix clock, ms modulo the wrap */
     hstpf_status_t status;
     int declared_row;         /* Table 1 row, -2 custom, -1 none */
     double declared_q;

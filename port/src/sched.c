@@ -200,7 +200,6 @@ void hstpfd_sched_clock_step(hstpfd_sched_t *s, int64_t t_us, int dir)
         seg_reset(s, s->t_step);
         s->restart_next = 1;
     }
-    s->fix_ahead = 0;
     s->have_fix = 0; /* the fix clock starts again from the next fix */
 }
 
@@ -253,20 +252,6 @@ static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_
         s->fix_u += d;
         /* least latency seen; creeps up by 100 ppm so a drifting clock is followed */
         off = s->fix_off + (t_rx - s->fix_rx) / 10000;
-        if (in_sequence && t_rx - s->fix_u - off > (int64_t)(HSTPFD_FIX_STEP_S * 1e6)) {
-            /* receive times ahead of the fix clock: a stall drains in a burst,
-             * a clock step stays; held long enough it is a step */
-            if (!s->fix_ahead) {
-                s->fix_ahead = 1;
-                s->fix_ahead_u = s->fix_u;
-            } else if (s->fix_u - s->fix_ahead_u >= (int64_t)(HSTPFD_FIX_STEP_HOLD_S * 1e6)) {
-                ++s->n.fix_clock_steps;
-                hstpfd_sched_clock_step(s, t_rx, 1);
-                off = t_rx - s->fix_u; /* the fix clock follows the new receive clock */
-            }
-        } else {
-            s->fix_ahead = 0;
-        }
         if (t_rx - s->fix_u < off) {
             off = t_rx - s->fix_u;
         }

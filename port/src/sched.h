@@ -35,11 +35,12 @@
  *   first fix.
  * - Time never goes back: an earlier timestamp counts as time_backwards and
  *   is taken as the latest time seen.
- * - Clock steps (hstpfd_sched_clock_step, from the daemon's clock guard, or
- *   found here: in-sequence fixes whose receive times run ahead of their fix
- *   times by more than HSTPFD_FIX_STEP_S for HSTPFD_FIX_STEP_HOLD_S of fix
- *   time): no predict steps across the step; the next position restarts the
- *   estimator (restart flag) as a first fix.
+ * - Clock steps (hstpfd_sched_clock_step, from the daemon's clock guard):
+ *   no predict steps across the step; the fix clock starts again; the next
+ *   position restarts the estimator (restart flag) as a first fix. A
+ *   shorter forward step of the receive clock is not found here: with fix
+ *   times it acts as an outage of its length (predicted across; the fixes
+ *   of that length come late and are dropped; dt stays the fixes' own).
  * - Every loop here ends within a bounded number of steps or when *stop is
  *   set (hstpfd_sched_set_stop): SIGTERM is honoured between steps. */
 #ifndef HSTPFD_SCHED_H
@@ -91,15 +92,9 @@ typedef struct {
     uint32_t restarts;         /* gaps beyond max_gap_s */
     uint32_t split;            /* steps split because longer than HSTPF_DT_MAX_S */
     uint32_t fix_dated;        /* positions dated by their fix time */
-    uint32_t clock_fwd;        /* receive clock steps forward (daemon's guard or fix times) */
+    uint32_t clock_fwd;        /* receive clock steps forward (the daemon's guard) */
     uint32_t clock_back;       /* receive clock steps back */
-    uint32_t fix_clock_steps;  /* of clock_fwd: found from the fix times */
 } hstpfd_sched_counts_t;
-
-/* A fix whose receive time runs this far ahead of its fix time (above the
- * least latency) for this long of fix time means the receive clock stepped. */
-#define HSTPFD_FIX_STEP_S 2.0
-#define HSTPFD_FIX_STEP_HOLD_S 10.0
 
 typedef struct {
     hstpfd_sched_config_t cfg;
@@ -122,8 +117,6 @@ typedef struct {
     uint8_t have_fix;
     int32_t fix_ms_last;
     int64_t fix_u, fix_rx, fix_off;
-    uint8_t fix_ahead;    /* receive times run ahead of the fix clock since fix_ahead_u */
-    int64_t fix_ahead_u;
     uint8_t restart_next; /* a clock step: the next position restarts the estimator */
     const volatile sig_atomic_t *stop; /* loops end when *stop (may be NULL) */
     hstpfd_sched_counts_t n;

@@ -203,7 +203,7 @@ static void health_sys(double stale, double unk, double err, double deg)
            m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
 }
 
-static void est_quality(double valid, double fault, double still, double psd, double vsd, double acq)
+static void est_quality(double valid, double fault, double still, double tvalid, double psd, double vsd, double t)
 {
     struct hstpf_can_est_quality_t m;
     uint8_t f[8];
@@ -211,24 +211,25 @@ static void est_quality(double valid, double fault, double still, double psd, do
     m.qual_valid = hstpf_frames_est_quality_qual_valid_raw(valid);
     m.qual_fault = hstpf_frames_est_quality_qual_fault_raw(fault);
     m.standstill = hstpf_frames_est_quality_standstill_raw(still);
+    m.est_time_valid = hstpf_frames_est_quality_est_time_valid_raw(tvalid);
     m.position_sd = hstpf_frames_est_quality_position_sd_raw(psd);
     m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(vsd);
-    m.acquisitions = hstpf_frames_est_quality_acquisitions_raw(acq);
+    m.est_time = hstpf_frames_est_quality_est_time_raw(t);
     hstpf_can_est_quality_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_QUALITY_ID), f, 8);
     hstpf_can_est_quality_unpack(&m, f, 8);
     head("EstQuality", HSTPF_FRAME_EST_QUALITY_ID, f);
-    printf("\"in\":{\"QualValid\":%.17g,\"QualFault\":%.17g,\"Standstill\":%.17g,\"PositionSd\":%.17g,"
-           "\"SpeedSd\":%.17g,\"Acquisitions\":%.17g},",
-           valid, fault, still, psd, vsd, acq);
+    printf("\"in\":{\"QualValid\":%.17g,\"QualFault\":%.17g,\"Standstill\":%.17g,\"EstTimeValid\":%.17g,"
+           "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%.17g},",
+           valid, fault, still, tvalid, psd, vsd, t);
     printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
-           "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"Acquisitions\":%u}}\n",
-           m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill,
+           "\"EstTimeValid\":%u,\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill, m.est_time_valid,
            hstpf_can_est_quality_position_sd_decode(m.position_sd), hstpf_can_est_quality_speed_sd_decode(m.speed_sd),
-           m.acquisitions);
+           m.est_time);
 }
 
-static void health_time(double fwd, double back, double late, double reacq)
+static void health_time(double fwd, double back, double late, double reacq, double acq)
 {
     struct hstpf_can_health_time_t m;
     uint8_t f[8];
@@ -237,15 +238,18 @@ static void health_time(double fwd, double back, double late, double reacq)
     m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(back);
     m.late_positions = hstpf_frames_health_time_late_positions_raw(late);
     m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(reacq);
+    m.acquisitions = hstpf_frames_health_time_acquisitions_raw(acq);
     hstpf_can_health_time_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_TIME_ID), f, 8);
     hstpf_can_health_time_unpack(&m, f, 8);
     head("HealthTime", HSTPF_FRAME_HEALTH_TIME_ID, f);
-    printf("\"in\":{\"ClockStepsFwd\":%.17g,\"ClockStepsBack\":%.17g,\"LatePositions\":%.17g,\"Reacquisitions\":%.17g},",
-           fwd, back, late, reacq);
+    printf("\"in\":{\"ClockStepsFwd\":%.17g,\"ClockStepsBack\":%.17g,\"LatePositions\":%.17g,\"Reacquisitions\":%.17g,"
+           "\"Acquisitions\":%.17g},",
+           fwd, back, late, reacq, acq);
     printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
-           "\"Reacquisitions\":%u}}\n",
-           m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions);
+           "\"Reacquisitions\":%u,\"Acquisitions\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions,
+           m.acquisitions);
 }
 
 static void encode_set(void)
@@ -282,10 +286,10 @@ static void encode_set(void)
     health_rx(1, 0, 17, 3, 4095, 1);
     health_sys(2, 0, 41, 4095);
     health_sys(0, 1, 0, 0);
-    health_time(1, 2, 37, 4095);
-    est_quality(1, 0, 0, 2.24, 0.22, 1);
-    est_quality(1, 0, 1, 0.0, 0.0, 3);
-    est_quality(0, 1, 0, 167772.15, 40.95, 4095);
+    health_time(1, 2, 37, 1023, 5);
+    est_quality(1, 0, 0, 1, 2.24, 0.22, 4660);
+    est_quality(1, 0, 1, 1, 0.0, 0.0, 0);
+    est_quality(0, 1, 0, 0, 10485.75, 40.95, 8191);
     est_type(3, 255, 0.0, 6, 0.42); /* withdrawn */
 }
 
@@ -399,18 +403,19 @@ static int decode_line(const char *line)
         struct hstpf_can_est_quality_t m;
         hstpf_can_est_quality_unpack(&m, f, n);
         printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
-               "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"Acquisitions\":%u",
-               m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill,
+               "\"EstTimeValid\":%u,\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%u",
+               m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill, m.est_time_valid,
                hstpf_can_est_quality_position_sd_decode(m.position_sd),
-               hstpf_can_est_quality_speed_sd_decode(m.speed_sd), m.acquisitions);
+               hstpf_can_est_quality_speed_sd_decode(m.speed_sd), m.est_time);
         break;
     }
     case HSTPF_FRAME_HEALTH_TIME_ID: {
         struct hstpf_can_health_time_t m;
         hstpf_can_health_time_unpack(&m, f, n);
         printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
-               "\"Reacquisitions\":%u",
-               m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions);
+               "\"Reacquisitions\":%u,\"Acquisitions\":%u",
+               m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions,
+               m.acquisitions);
         break;
     }
     default: {

@@ -1,6 +1,10 @@
 """hstpf-score: the estimator's output frames against the simulation's truth.
 
-Frame times are mapped to simulation time in one of two ways:
+An EstState frame followed by an EstQuality frame with EstTimeValid is
+dated by EstQuality.EstTime, the estimate's own time on the position
+sender's fix clock (inputs alignment: through the latest input's FixTime),
+whatever the bus or estimator latency. Other frame times are mapped to
+simulation time in one of two ways:
   inputs  the recorded log also holds the Position frames that were on the
           bus; each one is found by content in the simulated input log
           (--input-log), whose frame times are simulation times (+ its
@@ -66,6 +70,18 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
+    pos_msg = codec.message(POSITION)
+    fix_in: Optional[int] = None  # FixTime of the latest matched input
+    pending = None  # an EstState waiting for the EstQuality frame that dates it
+    n_dated = 0
+
+    def keep(name, t, ts, sig):
+        if t is None:
+            return
+        if align == "inputs" and name in (EST_STATE, EST_QUALITY) and t_in is not None and ts - t_in > max_age:
+            return
+        series[name].append((t, sig))
+
     for m in rec_msgs:
         if m.is_error_frame:
             continue
@@ -74,6 +90,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             if t is not None:
                 t_sim = t
                 t_in = m.timestamp
+                p = pos_msg.decode(bytes(m.data), decode_choices=False)
+                fix_in = int(p["FixTime"]) if p.get("FixTimeValid", 0) >= 0.5 else None
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
@@ -85,11 +103,31 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         if sig is None:
             continue
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
-        if t is None:
+        if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
+                and t_sim is not None:
+            # the estimate's own time, on the fix clock: the time with that
+            # FixTime nearest the latest input (a predict-only step may end
+            # after it; an estimator may lag it): within half a wrap
+            d = (fix_in - int(sig["EstTime"])) % FIX_TIME_WRAP_MS
+            if d > FIX_TIME_WRAP_MS // 2:
+                d -= FIX_TIME_WRAP_MS
+            t_est = t_sim - d / 1000.0
+            if pending is not None:
+                series[EST_STATE].append((t_est, pending[2]))
+                n_dated += 1
+                pending = None
+            series[name].append((t_est, sig))
             continue
-        if align == "inputs" and name in (EST_STATE, EST_QUALITY) and t_in is not None and m.timestamp - t_in > max_age:
+        if pending is not None:
+            keep(EST_STATE, *pending)
+            pending = None
+        if name == EST_STATE:
+            pending = (t, m.timestamp, sig)
             continue
-        series[name].append((t, sig))
+        keep(name, t, m.timestamp, sig)
+    if pending is not None:
+        keep(EST_STATE, *pending)
+    series["dated_by_est_time"] = n_dated
     return series, e2e_results
 
 
@@ -388,6 +426,7 @@ def _main(argv) -> int:
     res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
     res["output_e2e"] = e2e_res
+    res["state_frames_dated"] = series.pop("dated_by_est_time")
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
         try:

@@ -720,13 +720,14 @@ int hstpf_can_est_quality_pack(
     dst_p[1] |= pack_left_shift_u8(src_p->qual_valid, 4u, 0x10u);
     dst_p[1] |= pack_left_shift_u8(src_p->qual_fault, 5u, 0x20u);
     dst_p[1] |= pack_left_shift_u8(src_p->standstill, 6u, 0x40u);
+    dst_p[1] |= pack_left_shift_u8(src_p->est_time_valid, 7u, 0x80u);
     dst_p[2] |= pack_left_shift_u32(src_p->position_sd, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u32(src_p->position_sd, 8u, 0xffu);
-    dst_p[4] |= pack_right_shift_u32(src_p->position_sd, 16u, 0xffu);
-    dst_p[5] |= pack_left_shift_u16(src_p->speed_sd, 0u, 0xffu);
-    dst_p[6] |= pack_right_shift_u16(src_p->speed_sd, 8u, 0x0fu);
-    dst_p[6] |= pack_left_shift_u16(src_p->acquisitions, 4u, 0xf0u);
-    dst_p[7] |= pack_right_shift_u16(src_p->acquisitions, 4u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(src_p->position_sd, 16u, 0x0fu);
+    dst_p[4] |= pack_left_shift_u16(src_p->speed_sd, 4u, 0xf0u);
+    dst_p[5] |= pack_right_shift_u16(src_p->speed_sd, 4u, 0xffu);
+    dst_p[6] |= pack_left_shift_u16(src_p->est_time, 0u, 0xffu);
+    dst_p[7] |= pack_right_shift_u16(src_p->est_time, 8u, 0x1fu);
 
     return (8);
 }
@@ -745,13 +746,14 @@ int hstpf_can_est_quality_unpack(
     dst_p->qual_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
     dst_p->qual_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
     dst_p->standstill = unpack_right_shift_u8(src_p[1], 6u, 0x40u);
+    dst_p->est_time_valid = unpack_right_shift_u8(src_p[1], 7u, 0x80u);
     dst_p->position_sd = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
     dst_p->position_sd |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
-    dst_p->position_sd |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
-    dst_p->speed_sd = unpack_right_shift_u16(src_p[5], 0u, 0xffu);
-    dst_p->speed_sd |= unpack_left_shift_u16(src_p[6], 8u, 0x0fu);
-    dst_p->acquisitions = unpack_right_shift_u16(src_p[6], 4u, 0xf0u);
-    dst_p->acquisitions |= unpack_left_shift_u16(src_p[7], 4u, 0xffu);
+    dst_p->position_sd |= unpack_left_shift_u32(src_p[4], 16u, 0x0fu);
+    dst_p->speed_sd = unpack_right_shift_u16(src_p[4], 4u, 0xf0u);
+    dst_p->speed_sd |= unpack_left_shift_u16(src_p[5], 4u, 0xffu);
+    dst_p->est_time = unpack_right_shift_u16(src_p[6], 0u, 0xffu);
+    dst_p->est_time |= unpack_left_shift_u16(src_p[7], 8u, 0x1fu);
 
     return (0);
 }
@@ -867,6 +869,26 @@ bool hstpf_can_est_quality_standstill_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 1.0));
 }
 
+uint8_t hstpf_can_est_quality_est_time_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_est_time_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_est_time_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_est_time_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
 uint32_t hstpf_can_est_quality_position_sd_encode(double value)
 {
     return (uint32_t)(cantools_unsigned_from_double(round(value / 0.01)));
@@ -879,12 +901,12 @@ double hstpf_can_est_quality_position_sd_decode(uint32_t value)
 
 bool hstpf_can_est_quality_position_sd_is_in_range(uint32_t value)
 {
-    return (value <= 16777215u);
+    return (value <= 1048575u);
 }
 
 bool hstpf_can_est_quality_position_sd_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 167772.15));
+    return ((value >= 0.0) && (value <= 10485.75));
 }
 
 uint16_t hstpf_can_est_quality_speed_sd_encode(double value)
@@ -907,24 +929,24 @@ bool hstpf_can_est_quality_speed_sd_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 40.95));
 }
 
-uint16_t hstpf_can_est_quality_acquisitions_encode(double value)
+uint16_t hstpf_can_est_quality_est_time_encode(double value)
 {
     return (uint16_t)(cantools_unsigned_from_double(round(value)));
 }
 
-double hstpf_can_est_quality_acquisitions_decode(uint16_t value)
+double hstpf_can_est_quality_est_time_decode(uint16_t value)
 {
     return ((double)value);
 }
 
-bool hstpf_can_est_quality_acquisitions_is_in_range(uint16_t value)
+bool hstpf_can_est_quality_est_time_is_in_range(uint16_t value)
 {
-    return (value <= 4095u);
+    return (value <= 8191u);
 }
 
-bool hstpf_can_est_quality_acquisitions_is_in_phys_range(double value)
+bool hstpf_can_est_quality_est_time_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4095.0));
+    return ((value >= 0.0) && (value <= 8191.0));
 }
 
 int hstpf_can_est_type_pack(
@@ -1748,14 +1770,14 @@ int hstpf_can_health_time_pack(
 
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
-    dst_p[2] |= pack_left_shift_u16(src_p->clock_steps_fwd, 0u, 0xffu);
-    dst_p[3] |= pack_right_shift_u16(src_p->clock_steps_fwd, 8u, 0x0fu);
-    dst_p[3] |= pack_left_shift_u16(src_p->clock_steps_back, 4u, 0xf0u);
-    dst_p[4] |= pack_right_shift_u16(src_p->clock_steps_back, 4u, 0xffu);
-    dst_p[5] |= pack_left_shift_u16(src_p->late_positions, 0u, 0xffu);
-    dst_p[6] |= pack_right_shift_u16(src_p->late_positions, 8u, 0x0fu);
-    dst_p[6] |= pack_left_shift_u16(src_p->reacquisitions, 4u, 0xf0u);
-    dst_p[7] |= pack_right_shift_u16(src_p->reacquisitions, 4u, 0xffu);
+    dst_p[2] |= pack_left_shift_u8(src_p->clock_steps_fwd, 0u, 0xffu);
+    dst_p[3] |= pack_left_shift_u8(src_p->clock_steps_back, 0u, 0xffu);
+    dst_p[4] |= pack_left_shift_u16(src_p->late_positions, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(src_p->late_positions, 8u, 0x0fu);
+    dst_p[5] |= pack_left_shift_u16(src_p->reacquisitions, 4u, 0xf0u);
+    dst_p[6] |= pack_right_shift_u16(src_p->reacquisitions, 4u, 0x3fu);
+    dst_p[6] |= pack_left_shift_u16(src_p->acquisitions, 6u, 0xc0u);
+    dst_p[7] |= pack_right_shift_u16(src_p->acquisitions, 2u, 0xffu);
 
     return (8);
 }
@@ -1771,14 +1793,14 @@ int hstpf_can_health_time_unpack(
 
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
-    dst_p->clock_steps_fwd = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
-    dst_p->clock_steps_fwd |= unpack_left_shift_u16(src_p[3], 8u, 0x0fu);
-    dst_p->clock_steps_back = unpack_right_shift_u16(src_p[3], 4u, 0xf0u);
-    dst_p->clock_steps_back |= unpack_left_shift_u16(src_p[4], 4u, 0xffu);
-    dst_p->late_positions = unpack_right_shift_u16(src_p[5], 0u, 0xffu);
-    dst_p->late_positions |= unpack_left_shift_u16(src_p[6], 8u, 0x0fu);
-    dst_p->reacquisitions = unpack_right_shift_u16(src_p[6], 4u, 0xf0u);
-    dst_p->reacquisitions |= unpack_left_shift_u16(src_p[7], 4u, 0xffu);
+    dst_p->clock_steps_fwd = unpack_right_shift_u8(src_p[2], 0u, 0xffu);
+    dst_p->clock_steps_back = unpack_right_shift_u8(src_p[3], 0u, 0xffu);
+    dst_p->late_positions = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    dst_p->late_positions |= unpack_left_shift_u16(src_p[5], 8u, 0x0fu);
+    dst_p->reacquisitions = unpack_right_shift_u16(src_p[5], 4u, 0xf0u);
+    dst_p->reacquisitions |= unpack_left_shift_u16(src_p[6], 4u, 0x3fu);
+    dst_p->acquisitions = unpack_right_shift_u16(src_p[6], 6u, 0xc0u);
+    dst_p->acquisitions |= unpack_left_shift_u16(src_p[7], 2u, 0xffu);
 
     return (0);
 }
@@ -1834,44 +1856,48 @@ bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 14.0));
 }
 
-uint16_t hstpf_can_health_time_clock_steps_fwd_encode(double value)
+uint8_t hstpf_can_health_time_clock_steps_fwd_encode(double value)
 {
-    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
 }
 
-double hstpf_can_health_time_clock_steps_fwd_decode(uint16_t value)
+double hstpf_can_health_time_clock_steps_fwd_decode(uint8_t value)
 {
     return ((double)value);
 }
 
-bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint16_t value)
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint8_t value)
 {
-    return (value <= 4095u);
+    (void)value;
+
+    return (true);
 }
 
 bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4095.0));
+    return ((value >= 0.0) && (value <= 255.0));
 }
 
-uint16_t hstpf_can_health_time_clock_steps_back_encode(double value)
+uint8_t hstpf_can_health_time_clock_steps_back_encode(double value)
 {
-    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
 }
 
-double hstpf_can_health_time_clock_steps_back_decode(uint16_t value)
+double hstpf_can_health_time_clock_steps_back_decode(uint8_t value)
 {
     return ((double)value);
 }
 
-bool hstpf_can_health_time_clock_steps_back_is_in_range(uint16_t value)
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint8_t value)
 {
-    return (value <= 4095u);
+    (void)value;
+
+    return (true);
 }
 
 bool hstpf_can_health_time_clock_steps_back_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4095.0));
+    return ((value >= 0.0) && (value <= 255.0));
 }
 
 uint16_t hstpf_can_health_time_late_positions_encode(double value)
@@ -1906,10 +1932,30 @@ double hstpf_can_health_time_reacquisitions_decode(uint16_t value)
 
 bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value)
 {
-    return (value <= 4095u);
+    return (value <= 1023u);
 }
 
 bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 4095.0));
+    return ((value >= 0.0) && (value <= 1023.0));
+}
+
+uint16_t hstpf_can_health_time_acquisitions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_acquisitions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_acquisitions_is_in_range(uint16_t value)
+{
+    return (value <= 1023u);
+}
+
+bool hstpf_can_health_time_acquisitions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1023.0));
 }

@@ -118,6 +118,9 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_STANDSTILL_MOVING_CHOICE (0u)
 #define HSTPF_CAN_EST_QUALITY_STANDSTILL_STANDSTILL_CHOICE (1u)
 
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_ABSENT_CHOICE (0u)
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_PRESENT_CHOICE (1u)
+
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_UNDECIDED_CHOICE (0u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_DECLARED_CHOICE (1u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_CHANGED_CHOICE (2u)
@@ -200,9 +203,10 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_QUAL_VALID_NAME "QualValid"
 #define HSTPF_CAN_EST_QUALITY_QUAL_FAULT_NAME "QualFault"
 #define HSTPF_CAN_EST_QUALITY_STANDSTILL_NAME "Standstill"
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_NAME "EstTimeValid"
 #define HSTPF_CAN_EST_QUALITY_POSITION_SD_NAME "PositionSd"
 #define HSTPF_CAN_EST_QUALITY_SPEED_SD_NAME "SpeedSd"
-#define HSTPF_CAN_EST_QUALITY_ACQUISITIONS_NAME "Acquisitions"
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_NAME "EstTime"
 #define HSTPF_CAN_EST_TYPE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_TYPE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_NAME "TypeStatus"
@@ -237,6 +241,7 @@ extern "C" {
 #define HSTPF_CAN_HEALTH_TIME_CLOCK_STEPS_BACK_NAME "ClockStepsBack"
 #define HSTPF_CAN_HEALTH_TIME_LATE_POSITIONS_NAME "LatePositions"
 #define HSTPF_CAN_HEALTH_TIME_REACQUISITIONS_NAME "Reacquisitions"
+#define HSTPF_CAN_HEALTH_TIME_ACQUISITIONS_NAME "Acquisitions"
 
 /**
  * Signals in message Position.
@@ -413,7 +418,7 @@ struct hstpf_can_est_state_t {
 /**
  * Signals in message EstQuality.
  *
- * Uncertainty of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, acquisitions. Sent with EstState, after each estimator step, at most every 100 ms.
+ * Uncertainty and time of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, and the time the estimate refers to. Sent right after EstState, for the same estimator step, at most every 100 ms.
  *
  * All signal values are as on the CAN bus.
  */
@@ -460,9 +465,18 @@ struct hstpf_can_est_quality_t {
     uint8_t standstill;
 
     /**
+     * 1: EstTime holds the time of the estimate (the receiver has a fix clock: the position frames carry FixTime).
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t est_time_valid;
+
+    /**
      * Standard deviation of the estimated position (EstPosition); about 95 % of the truth lies within +-1.96 sd.
      *
-     * Range: 0..16777215 (0..167772.15 m)
+     * Range: 0..1048575 (0..10485.75 m)
      * Scale: 0.01
      * Offset: 0
      */
@@ -478,13 +492,13 @@ struct hstpf_can_est_quality_t {
     uint16_t speed_sd;
 
     /**
-     * Times the estimator (re)acquired lock from fixes: start, outage, gated run, clock step; saturates at 4095.
+     * Time the estimate of this step (and of the EstState frame just before) refers to, on the position sender's fix clock (Position.FixTime): ms modulo 8192. An estimate is then dated whatever the bus, gateway or estimator latency.
      *
-     * Range: 0..4095 (0..4095 -)
+     * Range: 0..8191 (0..8191 ms)
      * Scale: 1
      * Offset: 0
      */
-    uint16_t acquisitions;
+    uint16_t est_time;
 };
 
 /**
@@ -762,7 +776,7 @@ struct hstpf_can_health_sys_t {
 /**
  * Signals in message HealthTime.
  *
- * Receive-clock faults since start; each saturates at 4095. Cycle 1000 ms.
+ * Receive-clock faults and (re)acquisitions since start; each count saturates. Cycle 1000 ms.
  *
  * All signal values are as on the CAN bus.
  */
@@ -782,22 +796,22 @@ struct hstpf_can_health_time_t {
     uint8_t e2e_counter;
 
     /**
-     * Forward steps of the receive clock: a stamp more than max_gap_s after the latest, or receive times running ahead of the fixes' own times for 10 s.
+     * Forward steps of the receive clock: a stamp more than max_gap_s after the latest; saturates at 255.
      *
-     * Range: 0..4095 (0..4095 -)
+     * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
      */
-    uint16_t clock_steps_fwd;
+    uint8_t clock_steps_fwd;
 
     /**
-     * Backward steps of the receive clock: a stamp more than 1 s before the latest.
+     * Backward steps of the receive clock: a stamp more than 1 s before the latest; saturates at 255.
      *
-     * Range: 0..4095 (0..4095 -)
+     * Range: 0..255 (0..255 -)
      * Scale: 1
      * Offset: 0
      */
-    uint16_t clock_steps_back;
+    uint8_t clock_steps_back;
 
     /**
      * Valid positions dropped because they were not newer than the last estimator step.
@@ -809,13 +823,22 @@ struct hstpf_can_health_time_t {
     uint16_t late_positions;
 
     /**
-     * Times the daemon made the estimator re-acquire from the next fix (a gap beyond max_gap_s or a clock step).
+     * Times the daemon made the estimator re-acquire from the next fix (a gap beyond max_gap_s or a clock step); saturates at 1023.
      *
-     * Range: 0..4095 (0..4095 -)
+     * Range: 0..1023 (0..1023 -)
      * Scale: 1
      * Offset: 0
      */
     uint16_t reacquisitions;
+
+    /**
+     * Times the estimator (re)acquired lock from fixes: start, outage, gated run, clock step (hstpf_estimate_t.acquisitions); saturates at 1023.
+     *
+     * Range: 0..1023 (0..1023 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t acquisitions;
 };
 
 /**
@@ -1853,6 +1876,46 @@ bool hstpf_can_est_quality_standstill_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
+uint8_t hstpf_can_est_quality_est_time_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_est_time_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint32_t hstpf_can_est_quality_position_sd_encode(double value);
 
 /**
@@ -1933,7 +1996,7 @@ bool hstpf_can_est_quality_speed_sd_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
-uint16_t hstpf_can_est_quality_acquisitions_encode(double value);
+uint16_t hstpf_can_est_quality_est_time_encode(double value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -1942,7 +2005,7 @@ uint16_t hstpf_can_est_quality_acquisitions_encode(double value);
  *
  * @return Decoded signal.
  */
-double hstpf_can_est_quality_acquisitions_decode(uint16_t value);
+double hstpf_can_est_quality_est_time_decode(uint16_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -1951,7 +2014,7 @@ double hstpf_can_est_quality_acquisitions_decode(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_est_quality_acquisitions_is_in_range(uint16_t value);
+bool hstpf_can_est_quality_est_time_is_in_range(uint16_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -1964,7 +2027,7 @@ bool hstpf_can_est_quality_acquisitions_is_in_range(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_est_quality_acquisitions_is_in_phys_range(double value);
+bool hstpf_can_est_quality_est_time_is_in_phys_range(double value);
 
 /**
  * Pack message EstType.
@@ -3358,7 +3421,7 @@ bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
-uint16_t hstpf_can_health_time_clock_steps_fwd_encode(double value);
+uint8_t hstpf_can_health_time_clock_steps_fwd_encode(double value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -3367,7 +3430,7 @@ uint16_t hstpf_can_health_time_clock_steps_fwd_encode(double value);
  *
  * @return Decoded signal.
  */
-double hstpf_can_health_time_clock_steps_fwd_decode(uint16_t value);
+double hstpf_can_health_time_clock_steps_fwd_decode(uint8_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -3376,7 +3439,7 @@ double hstpf_can_health_time_clock_steps_fwd_decode(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint16_t value);
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint8_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -3398,7 +3461,7 @@ bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
-uint16_t hstpf_can_health_time_clock_steps_back_encode(double value);
+uint8_t hstpf_can_health_time_clock_steps_back_encode(double value);
 
 /**
  * Decode given signal by applying scaling and offset.
@@ -3407,7 +3470,7 @@ uint16_t hstpf_can_health_time_clock_steps_back_encode(double value);
  *
  * @return Decoded signal.
  */
-double hstpf_can_health_time_clock_steps_back_decode(uint16_t value);
+double hstpf_can_health_time_clock_steps_back_decode(uint8_t value);
 
 /**
  * Check that given signal is in allowed range.
@@ -3416,7 +3479,7 @@ double hstpf_can_health_time_clock_steps_back_decode(uint16_t value);
  *
  * @return true if in range, false otherwise.
  */
-bool hstpf_can_health_time_clock_steps_back_is_in_range(uint16_t value);
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint8_t value);
 
 /**
  * Check that given physical value is in allowed range before encoding.
@@ -3510,6 +3573,46 @@ bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_acquisitions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_acquisitions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_acquisitions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_acquisitions_is_in_phys_range(double value);
 
 
 #ifdef __cplusplus

@@ -131,9 +131,14 @@ uint8_t hstpf_frames_est_quality_standstill_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
+uint8_t hstpf_frames_est_quality_est_time_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
 uint32_t hstpf_frames_est_quality_position_sd_raw(double phys)
 {
-    return (uint32_t)raw_sat(phys, 0.01, 0.0, 0.0, 16777215.0);
+    return (uint32_t)raw_sat(phys, 0.01, 0.0, 0.0, 1048575.0);
 }
 
 uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys)
@@ -141,9 +146,9 @@ uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys)
     return (uint16_t)raw_sat(phys, 0.01, 0.0, 0.0, 4095.0);
 }
 
-uint16_t hstpf_frames_est_quality_acquisitions_raw(double phys)
+uint16_t hstpf_frames_est_quality_est_time_raw(double phys)
 {
-    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 8191.0);
 }
 
 uint8_t hstpf_frames_est_type_type_status_raw(double phys)
@@ -246,14 +251,14 @@ uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys)
     return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
 }
 
-uint16_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys)
+uint8_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys)
 {
-    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 255.0);
 }
 
-uint16_t hstpf_frames_health_time_clock_steps_back_raw(double phys)
+uint8_t hstpf_frames_health_time_clock_steps_back_raw(double phys)
 {
-    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 255.0);
 }
 
 uint16_t hstpf_frames_health_time_late_positions_raw(double phys)
@@ -263,5 +268,10 @@ uint16_t hstpf_frames_health_time_late_positions_raw(double phys)
 
 uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys)
 {
-    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 1023.0);
+}
+
+uint16_t hstpf_frames_health_time_acquisitions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 1023.0);
 }

@@ -44,7 +44,7 @@ extern "C" {
 #define HSTPF_FRAME_EST_STATE_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_EST_STATE_E2E_TIMEOUT_MS 5000u
 
-/* EstQuality: Uncertainty of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, acquisitions. */
+/* EstQuality: Uncertainty and time of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, and the time the estimate refers to. */
 #define HSTPF_FRAME_EST_QUALITY_ID 0x201u
 #define HSTPF_FRAME_EST_QUALITY_DATA_ID 0x2107u
 #define HSTPF_FRAME_EST_QUALITY_LENGTH 8u
@@ -84,7 +84,7 @@ extern "C" {
 #define HSTPF_FRAME_HEALTH_SYS_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_HEALTH_SYS_E2E_TIMEOUT_MS 5000u
 
-/* HealthTime: Receive-clock faults since start; each saturates at 4095. */
+/* HealthTime: Receive-clock faults and (re)acquisitions since start; each count saturates. */
 #define HSTPF_FRAME_HEALTH_TIME_ID 0x222u
 #define HSTPF_FRAME_HEALTH_TIME_DATA_ID 0x2106u
 #define HSTPF_FRAME_HEALTH_TIME_LENGTH 8u
@@ -151,12 +151,14 @@ uint8_t hstpf_frames_est_quality_qual_valid_raw(double phys);
 uint8_t hstpf_frames_est_quality_qual_fault_raw(double phys);
 /** EstQuality.Standstill: scale 1, [0, 1]. */
 uint8_t hstpf_frames_est_quality_standstill_raw(double phys);
-/** EstQuality.PositionSd: scale 0.01, [0, 167772] m. */
+/** EstQuality.EstTimeValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_est_time_valid_raw(double phys);
+/** EstQuality.PositionSd: scale 0.01, [0, 10485.8] m. */
 uint32_t hstpf_frames_est_quality_position_sd_raw(double phys);
 /** EstQuality.SpeedSd: scale 0.01, [0, 40.95] m/s. */
 uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys);
-/** EstQuality.Acquisitions: scale 1, [0, 4095]. */
-uint16_t hstpf_frames_est_quality_acquisitions_raw(double phys);
+/** EstQuality.EstTime: scale 1, [0, 8191] ms. */
+uint16_t hstpf_frames_est_quality_est_time_raw(double phys);
 /** EstType.TypeStatus: scale 1, [0, 3]. */
 uint8_t hstpf_frames_est_type_type_status_raw(double phys);
 /** EstType.DeclaredType: scale 1, [0, 255]. */
@@ -197,14 +199,16 @@ uint16_t hstpf_frames_health_sys_unknown_id_raw(double phys);
 uint16_t hstpf_frames_health_sys_error_frames_raw(double phys);
 /** HealthSys.Degeneracy: scale 1, [0, 4095]. */
 uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys);
-/** HealthTime.ClockStepsFwd: scale 1, [0, 4095]. */
-uint16_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys);
-/** HealthTime.ClockStepsBack: scale 1, [0, 4095]. */
-uint16_t hstpf_frames_health_time_clock_steps_back_raw(double phys);
+/** HealthTime.ClockStepsFwd: scale 1, [0, 255]. */
+uint8_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys);
+/** HealthTime.ClockStepsBack: scale 1, [0, 255]. */
+uint8_t hstpf_frames_health_time_clock_steps_back_raw(double phys);
 /** HealthTime.LatePositions: scale 1, [0, 4095]. */
 uint16_t hstpf_frames_health_time_late_positions_raw(double phys);
-/** HealthTime.Reacquisitions: scale 1, [0, 4095]. */
+/** HealthTime.Reacquisitions: scale 1, [0, 1023]. */
 uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys);
+/** HealthTime.Acquisitions: scale 1, [0, 1023]. */
+uint16_t hstpf_frames_health_time_acquisitions_raw(double phys);
 
 #ifdef __cplusplus
 }
