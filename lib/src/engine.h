@@ -35,7 +35,9 @@ typedef struct {
  *   ends at rest, v' = 0 exactly;
  * - a state at rest (v == 0) whose net acceleration xu - k0 - g <= 0 is
  *   held: s' = s, v' = 0, no process noise;
- * - m->held = 1 when the model's whole posterior was held this step.
+ * - m->held = 1 when the model's whole posterior ends the step at rest
+ *   (held, or come to rest within it): then neither s' = s + T v nor
+ *   v' = 0 involves W, and the step carries no evidence about it.
  */
 typedef struct {
     /* Every model placed from the acquisition fixes. */

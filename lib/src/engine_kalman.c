@@ -92,7 +92,9 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         qsv = 0.0;
         qvv = 0.0;
     } else if (vd < 0.0) {
-        /* comes to rest within the step: v' = 0 exactly */
+        /* comes to rest within the step: v' = 0 exactly; s' = s + dt v and
+         * v' do not involve W, so for the weights this is standstill too */
+        m->held = 1;
         ns = s + dt * v + scale * c->noise_s.mean;
         nv = 0.0;
         qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;

@@ -272,7 +272,8 @@ static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
             ++held;
         } else if (vd < (real)0) {
             m->s[i] = s + dt * v + f->nz_s[i];
-            m->v[i] = 0; /* comes to rest within the step */
+            m->v[i] = 0; /* comes to rest within the step: no W in s' or v' */
+            ++held;
         } else {
             const real vn = vd + f->nz_v[i];
             m->s[i] = s + dt * v + f->nz_s[i];

@@ -19,7 +19,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-from .frames import TABLE1, type_index
+from .frames import type_index
+from .table1 import TABLE1
 
 G = 9.81
 
