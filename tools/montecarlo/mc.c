@@ -248,9 +248,14 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         cfg.track = sc.track;
         cfg.n_track = sc.n_track;
     }
-    if (hstpf_init(f, sizeof *f, &cfg) != HSTPF_OK) {
-        fprintf(stderr, "hstpf_init failed\n");
-        exit(1);
+    {
+        const int32_t rc = hstpf_init(f, sizeof *f, &cfg);
+        if (rc != HSTPF_OK) {
+            const char *field = "";
+            (void)hstpf_config_check(&cfg, &field);
+            fprintf(stderr, "hstpf-mc: hstpf_init failed (%d)%s%s\n", (int)rc, *field ? ": " : "", field);
+            exit(1);
+        }
     }
     hstpf_sim_init(&sim, &sc);
     if (trace) {
