@@ -308,9 +308,9 @@ typedef struct {
     double position_sd_m;
     hstpf_real_t speed_sd_mps;
     /** 1 when every published value is finite and within the ranges this
-     *  header documents and the filter has lock on the train (acquired from
-     *  fixes and not lost since); 0 otherwise: consumers must not use the
-     *  states, theta or resistance. */
+     *  header documents, the filter has lock on the train (acquired from
+     *  fixes and not lost since) and the latest fix was not gated; 0
+     *  otherwise: consumers must not use the states, theta or resistance. */
     uint8_t valid;
     /** 1 while the train is held at standstill (docs/model.md): the model
      *  weights are not updated. */
