@@ -135,3 +135,25 @@ def test_error_bound_is_the_model_prediction_error():
     want = 6 * math.sqrt(5.0 + (0.5 * tau) ** 2 + 0.05 * tau ** 3 / 3 + 0.02 * tau)
     assert soak.error_bound(tau, 6.0) == pytest.approx(want)
     assert soak.speed_bound(0.0, 6.0) == pytest.approx(6 * math.sqrt(10.05))
+
+
+def test_checker_catches_growth(day):
+    """Made-up samples of the same run: per-step CPU time growing with the
+    step number and RSS growing by 1 MB are both caught; flat ones are not."""
+    d, _, rep, _ = day
+    n = rep["steps"]
+    ks = np.linspace(1, n, 400)
+
+    def rec(cpu, rss):
+        return {"exit": 0, "wall_s": 1.0, "stderr": "",
+                "samples": [(i * 0.01, float(c), int(r), int(k)) for i, (k, c, r) in enumerate(zip(ks, cpu, rss))]}
+
+    args = (str(d / "steps.jsonl"), str(d / "summary.json"), str(d / "soak"))
+    flat = soak.check(*args, rec(50e-6 * ks, np.full(len(ks), 2400)), 1800.0, 300.0, 6.0, 256, 0.25)
+    assert "step_time" not in flat["failed_checks"] and "rss" not in flat["failed_checks"]
+    assert flat["cpu_us_per_step_first"] == pytest.approx(50.0, rel=0.02)
+    # 50 us per step at the start, 100 us at the end: the per-step time doubles
+    grow = soak.check(*args, rec(50e-6 * (ks + ks ** 2 / (2 * n)), 2400 + 1024 * ks / n), 1800.0, 300.0, 6.0,
+                      256, 0.25)
+    assert grow["failed_checks"].get("step_time") == 1 and grow["failed_checks"].get("rss") == 1
+    assert grow["cpu_us_per_step_last"] > 1.5 * grow["cpu_us_per_step_first"]
