@@ -553,8 +553,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--make-only", action="store_true", help="only make the log")
     p.add_argument("--hstpfd", help="the daemon (default: $HSTPF_BUILD_DIR/port/hstpfd, build/port/hstpfd, PATH)")
     p.add_argument("--sample-s", type=float, default=0.1, help="sampling period of RSS and CPU time, s (0.1)")
-    p.add_argument("--block-s", type=float, default=3600.0, help="blocks of simulated time compared for flatness (3600)")
-    p.add_argument("--warmup-s", type=float, default=600.0, help="simulated time left out of the first block's RSS (600)")
+    p.add_argument("--block-s", type=float, default=3600.0,
+                   help="blocks of simulated time compared for flatness, s (3600)")
+    p.add_argument("--warmup-s", type=float, default=600.0,
+                   help="simulated time left out of the first block (RSS and CPU), s (600)")
     p.add_argument("--k-sd", type=float, default=6.0, help="position error bound in standard deviations (6)")
     p.add_argument("--rss-tol-kb", type=int, default=256, help="RSS growth allowed, last block against first (256)")
     p.add_argument("--cpu-tol", type=float, default=0.25, help="per-step CPU growth allowed, fraction (0.25)")
