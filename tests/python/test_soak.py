@@ -157,3 +157,18 @@ def test_checker_catches_growth(day):
                       256, 0.25)
     assert grow["failed_checks"].get("step_time") == 1 and grow["failed_checks"].get("rss") == 1
     assert grow["cpu_us_per_step_last"] > 1.5 * grow["cpu_us_per_step_first"]
+
+
+def test_rerun_on_the_same_log_and_folder(day):
+    """--log runs hstpfd again on a made day; the step stream left by the first
+    run is not taken for the second run's progress (samples start from 0)."""
+    d, _, rep, _ = day
+    code = soak.main(["--log", str(d / "soak.log"), "--dir", str(d), "--hstpfd", hstpfd_path(), "--block-s", "1800",
+                      "--warmup-s", "300", "--sample-s", "0.01", "--cpu-tol", "0.5", "--json", str(d / "r2.json")])
+    rep2 = json.loads((d / "r2.json").read_text())
+    ks = [int(line.split(",")[3]) for line in (d / "samples.csv").read_text().splitlines()[1:]]
+    assert ks == sorted(ks) and ks[0] < 1000
+    assert all(b["cpu_us_per_step"] > 0 for b in rep2["blocks"])
+    # the same log gives the same steps: the daemon is deterministic
+    assert rep2["steps"] == rep["steps"] and rep2["position_error_fix_m"] == rep["position_error_fix_m"]
+    assert code in (0, 1) and rep2["failed_checks"].keys() <= {"speed_error"}

@@ -16,6 +16,7 @@ Three parts, each usable alone:
 """
 import argparse
 import bisect
+import contextlib
 import csv
 import json
 import math
@@ -226,6 +227,9 @@ def run(hstpfd: str, log: str, outdir: str, args: Sequence[str], sample_s: float
     steps = str(Path(outdir) / "steps.jsonl")
     summary = str(Path(outdir) / "summary.json")
     cmd = [hstpfd, *args, "--log", log, "--out", steps, "--summary", summary]
+    for old in (steps, summary):  # a stream left from an earlier run would be sampled as this one's progress
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(old)
     samples = []
     w0 = time.perf_counter()
     with open(os.devnull, "w") as null, open(Path(outdir) / "hstpfd.stderr", "w") as err:
