@@ -487,8 +487,9 @@ def check(steps_path: str, summary_path: str, stem: str, run_rec: Optional[dict]
             fail(f"last block max {max(lastb)} kB against {max(first)} kB in the first (+{rss_tol_kb} allowed)",
                  "rss")
         if len(blocks) >= 2:
-            # medians of the first and last quarter (at most 6 blocks): one block's CPU time
-            # moves by +-20 % on a shared machine (docs/soak.md), a growth with the run does not
+            # medians of the first and last quarter (at most 6 blocks): on a shared machine a
+            # quarter's median moves by +-20 % from run to run (docs/soak.md); a cost that
+            # grows with the run's length grows far more than that over a day
             m = max(1, min(6, len(blocks) // 4))
             c_first = round(float(np.median([b["cpu_us_per_step"] for b in blocks[:m]])), 2)
             c_last = round(float(np.median([b["cpu_us_per_step"] for b in blocks[-m:]])), 2)
@@ -574,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="simulated time left out of the first block (RSS and CPU), s (600)")
     p.add_argument("--k-sd", type=float, default=6.0, help="position error bound in standard deviations (6)")
     p.add_argument("--rss-tol-kb", type=int, default=256, help="RSS growth allowed, last block against first (256)")
-    p.add_argument("--cpu-tol", type=float, default=0.25, help="per-step CPU growth allowed, fraction (0.25)")
+    p.add_argument("--cpu-tol", type=float, default=0.5, help="per-step CPU growth allowed, fraction (0.5)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     cli.add_json_argument(p)
     p.add_argument("hstpfd_args", nargs=argparse.REMAINDER, help="-- then hstpfd's options")
