@@ -80,6 +80,7 @@ static void reset_state(hstpf_t *f)
     f->ever_locked = 0;
     f->standstill = 0;
     f->outlier_run = 0;
+    f->lost_run = 0;
 }
 
 /* Noise tables; the specs were checked, so these cannot fail. */
@@ -209,6 +210,7 @@ static void drop_lock(hstpf_t *f, int keep_pend)
     f->have_fix = 0;
     f->have_pend = (uint8_t)(keep_pend && f->have_pend);
     f->standstill = 0;
+    f->lost_run = 0;
 }
 
 static void update_model_weights(hstpf_t *f)
@@ -494,6 +496,19 @@ static int at_standstill(const hstpf_t *f)
     return !(wb[f->cfg.n_models] > 0.0 && !f->rf.held);
 }
 
+static int all_lost(const hstpf_t *f)
+{
+    double wb[HSTPF_MAX_MODELS + 1];
+    uint16_t l;
+    blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        if (wb[l] > 0.0 && f->m[l].floor_run == 0u) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 /* Time passes without a lock: only the pending fix ages. */
 static void advance_time(hstpf_t *f, double dt)
 {
@@ -572,6 +587,12 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         hstpf__refine_update(f, &st);
     }
     f->standstill = (uint8_t)at_standstill(f);
+    if (has_y) {
+        /* every model that carries weight put this fix beyond its floor:
+         * the fixes and the estimate disagree (a train moving although
+         * held, a time base that broke); a run of these re-acquires */
+        f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + 1u) : 0u;
+    }
     if (has_y && !f->standstill) {
         update_model_weights(f);
     }
@@ -589,6 +610,14 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     }
     update_declaration(f, in->dt_s, has_y && !f->standstill);
     rebase(f);
+    if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {
+        ++f->reacquired;
+        f->lost_run = 0;
+        drop_lock(f, 0);
+        f->have_pend = 1; /* this fix pairs with the next */
+        f->pend_y = in->position_m;
+        f->pend_age_s = 0.0;
+    }
     return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
 }
 
@@ -764,6 +793,9 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->reacquired = f->reacquired;
     out->acquisitions = f->acquisitions;
     out->nonfinite_resets = f->nonfinite_resets;
-    out->valid = (uint8_t)(f->have_fix && in_ranges(out));
+    /* a gated last fix: the fixes and the estimate disagree beyond the
+     * gate (a reference jump, or a time base that stepped), so the estimate
+     * is not to be trusted until they agree again or it re-acquires */
+    out->valid = (uint8_t)(f->have_fix && f->outlier_run == 0u && f->lost_run == 0u && in_ranges(out));
     return HSTPF_OK;
 }

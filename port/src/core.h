@@ -16,11 +16,11 @@
 
 /* The library's lock and validity (hstpf_estimate_t.valid, the sd fields)
  * and hstpf_reacquire() are used once the library implements them (the API
- * is in the header; set to 1 when the implementation is merged). Until then
+ * is in the header and implemented: 1). With 0 (a library without them)
  * the daemon takes "has a fix" for the lock, publishes no sd (null, and
  * QualValid 0) and restarts with hstpf_reset(). */
 #ifndef HSTPFD_LIB_LOCK_API
-#define HSTPFD_LIB_LOCK_API 0
+#define HSTPFD_LIB_LOCK_API 1
 #endif
 
 /* Sends one frame; returns 0, HSTPFD_SEND_OFFLINE if there is no open

@@ -41,7 +41,8 @@ SCRIPTS = scripts()
 
 def test_every_console_script_is_covered():
     # a new script must get its rows in the tables below
-    assert set(SCRIPTS) == {"hstpf-simulate", "hstpf-encode", "hstpf-replay", "hstpf-record", "hstpf-score"}
+    assert set(SCRIPTS) == {"hstpf-simulate", "hstpf-encode", "hstpf-replay", "hstpf-record", "hstpf-score",
+                            "hstpf-soak"}
 
 
 @pytest.fixture
@@ -96,6 +97,7 @@ def args_missing_input(name, d):
         "hstpf-replay": [MISSING, "--no-bus", "-o", str(d / "x.log")],
         "hstpf-record": ["-i", "virtual", "-c", "hstpf-cli-rec", "--duration", "0.05", "-o", MISSING],
         "hstpf-score": [MISSING, "--truth", str(d / "run_truth.csv")],
+        "hstpf-soak": ["--log", MISSING, "--dir", str(d / "soak")],
     }[name]
 
 
@@ -155,6 +157,7 @@ def json_args(name, d):
         "hstpf-record": ["-i", "virtual", "-c", "hstpf-cli-" + uuid.uuid4().hex, "-o", str(d / "r.log"),
                          "--first-timeout", "0.1"],
         "hstpf-score": [str(d / "est.log"), "--truth", str(d / "run_truth.csv"), "--plots", str(d / "plots")],
+        "hstpf-soak": ["--make-only", "--hours", "0.01", "--dir", str(d / "soak")],
     }[name]
 
 

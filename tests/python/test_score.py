@@ -231,3 +231,38 @@ def test_est_time_after_the_latest_input(sim, tmp_path):
     res = json.loads(js.read_text())
     assert res["state_frames_dated"] >= res["state_frames"] > 300  # the last one, at 400.5 s, is past the truth
     assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+
+
+def test_est_time_during_a_stall(sim, tmp_path):
+    """The inputs stall for 6 s (more than half the 8.192 s wrap) while the
+    estimator predicts on: its estimates end up to 6 s past the latest
+    input seen and are dated there (from how long after it they came), not
+    a wrap earlier."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    fix0 = None
+    for m in read_log(str(log)):
+        t = m.timestamp
+        if 200.0 < t < 206.0:
+            continue  # the stalled inputs never reach the bus
+        msgs.append(message(t, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id == 0x100 and fix0 is None:
+            fix0 = FrameCodec().decode(0x100, bytes(m.data), check=False)[1]["FixTime"] - round(t * 1000) % 8192
+    for k in range(1, 6):  # predictions at 201..205 s
+        ts = 200.0 + k
+        s = np.interp(ts, rows["time_s"], rows["position_m"])
+        v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(ts + 0.0001, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1,
+                                                "EstTime": (round(ts * 1000) + fix0) % 8192})
+        msgs.append(message(ts + 0.0002, fid, data))
+    msgs.sort(key=lambda m: m.timestamp)
+    rec = tmp_path / "stall.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "stall.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] == res["state_frames"] == 5
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)

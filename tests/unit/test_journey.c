@@ -258,6 +258,38 @@ static void test_clock_steps_particle(void **state)
     clock_steps(HSTPF_ENGINE_PARTICLE);
 }
 
+/* A train that leaves while the holding brake is still reported (a late or
+ * wrong traction channel): the held filter cannot follow, so once every
+ * model puts the fixes beyond its floor the estimate is marked invalid, and
+ * after reacquire_after such fixes it re-acquires from them and tracks. */
+static void test_held_but_moving(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    int k, invalid_steps = 0, k_reacquired = -1;
+    (void)state;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 0.0, 0.0, 16);
+    for (k = 0; k < 200; ++k) {
+        const double u_true = k < 60 ? -50.0 : 40.0;
+        step(1.0, -50.0, truth_fix(&t), 1); /* the brake, whatever the train does */
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        invalid_steps += k > 60 && !e.valid;
+        k_reacquired = k_reacquired < 0 && e.reacquired > 0u ? k : k_reacquired;
+        if (e.valid && k > 60) {
+            /* valid means within the floor: a few innovation sds */
+            assert_true(fabs(e.position_m - t.s) <= 8.0 * sqrt(5.0 + e.position_sd_m * e.position_sd_m) + 3.0);
+        }
+        truth_step(&t, u_true);
+    }
+    assert_true(invalid_steps > 0);
+    /* within 30 s of the departure: long before the 1000 m gate would */
+    assert_true(k_reacquired > 60 && k_reacquired < 90);
+}
+
 /* 60 s without fixes while accelerating: the position sd grows every step
  * of the outage and the truth stays inside 4 sd; fixes then bring it back. */
 static void test_outage_sd_grows(void **state)
@@ -397,6 +429,7 @@ int main(void)
         cmocka_unit_test(test_start_at_speed_kalman), cmocka_unit_test(test_start_at_speed_particle),
         cmocka_unit_test(test_clock_steps_kalman),    cmocka_unit_test(test_clock_steps_particle),
         cmocka_unit_test(test_outage_sd_grows),       cmocka_unit_test(test_declaration_states),
+        cmocka_unit_test(test_held_but_moving),
         cmocka_unit_test(test_nonfinite_reset),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

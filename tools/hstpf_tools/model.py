@@ -223,6 +223,8 @@ def simulate(
 ) -> Run:
     """Runs the model from rest at s = 0 for duration_s (n = round(duration/T) steps).
 
+    profile: a name of PROFILES or a list of phases in the same form.
+
     noise = (w_s, w_v, e); only w_s, w_v are used here (e is per frame).
     The true traction makes the noise-free train follow the profile:
     u = a_profile / xi + W(v) + g(s) with the current true speed and
@@ -233,7 +235,7 @@ def simulate(
         raise ValueError("duration and step must be > 0")
     rng = rng if rng is not None else np.random.default_rng()
     track = track or Track()
-    phases = PROFILES[profile]
+    phases = PROFILES[profile] if isinstance(profile, str) else list(profile)  # a name or a phase list
     k_xi = xi(gamma)
     n = int(round(duration_s / dt))
     ws = noise[0].sample(rng, n)

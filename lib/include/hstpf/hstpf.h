@@ -308,9 +308,10 @@ typedef struct {
     double position_sd_m;
     hstpf_real_t speed_sd_mps;
     /** 1 when every published value is finite and within the ranges this
-     *  header documents and the filter has lock on the train (acquired from
-     *  fixes and not lost since); 0 otherwise: consumers must not use the
-     *  states, theta or resistance. */
+     *  header documents, the filter has lock on the train (acquired from
+     *  fixes and not lost since) and the latest fix was neither gated nor
+     *  beyond the likelihood floor of every weighted model; 0
+     *  otherwise: consumers must not use the states, theta or resistance. */
     uint8_t valid;
     /** 1 while the train is held at standstill (docs/model.md): the model
      *  weights are not updated. */
@@ -396,6 +397,7 @@ typedef struct {
     hstpf_status_t status;
     uint32_t outliers, reacquired;
     uint16_t outlier_run;            /* consecutive gated measurements */
+    uint16_t lost_run;               /* consecutive fixes every weighted model put beyond its floor */
     uint8_t have_fix;                /* locked: acquired and tracking */
     uint8_t have_pend;               /* one fix waiting for a second to acquire */
     uint8_t standstill;              /* this step's model weights were held */
