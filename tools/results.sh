@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/results: every Monte Carlo scenario (100 seeds each), the
-# Case 2 ablation, and the figures. A few minutes on 2 cores.
+# journeys, the Case 2 ablation, and the figures. A few minutes on 2 cores
+# (docs/results.md gives the measured time).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
@@ -21,6 +22,11 @@ for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-kn
   trace=()
   case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; esac
   "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
+done
+echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
+for s in stops day start300 clock+30 clock-30 outage gain5; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 echo "== particle engine on the Gaussian cases (the paper's method)"
 for s in paper1 all17; do

@@ -1,8 +1,19 @@
-/* Library-internal functions, exposed for the unit tests only. */
+/* Library-internal declarations shared by the library's files, and the
+ * resampling internals exposed for the unit tests. */
 #ifndef HSTPF_INTERNAL_H
 #define HSTPF_INTERNAL_H
 
 #include "hstpf/hstpf.h"
+
+#define HSTPF_MAGIC 0x48535446u /* "HSTF": set by hstpf_init */
+#define HSTPF_G_ACC 9.81        /* m/s^2 */
+
+/* The full range check of a configuration (config.c); *field names the
+ * first failing field. */
+int32_t hstpf__config_check(const hstpf_config_t *c, const char **field);
+
+/* 1 when noise_s, noise_v and noise_e are all Gaussian. */
+int hstpf__all_gaussian(const hstpf_config_t *c);
 
 /* Systematic resampling counts: counts[i] copies of particle i for the
  * normalised weights w[0..n-1] and the offset u0 in [0, 1). Always sums to

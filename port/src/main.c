@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "candump.h"
 #include "config.h"
 #include "core.h"
 #include "source.h"
@@ -191,6 +192,10 @@ int main(int argc, char **argv)
         return bad(err);
     }
 
+    if (cfg.log[0] != '\0' && hstpfd_candump_check_file(cfg.log, err, sizeof err) != 0) {
+        fprintf(stderr, "hstpfd: %s\n", err);
+        return 1;
+    }
     if (cfg.out[0] != '\0' && (out = open_out(cfg.out, "the step stream")) == NULL) {
         return 1;
     }

@@ -12,6 +12,7 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 build=$(cd "${1:-$root/build}" && pwd)
 iface=${HSTPF_VCAN_IFACE:-vcan0}
+export CAN_INTERFACE=socketcan # python-can has no default interface; -c names the channel
 speed=${HSTPF_HIL_SPEED:-10}
 dur=${HSTPF_HIL_DURATION:-600}
 bin=$build/port/hstpfd

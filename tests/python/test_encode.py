@@ -50,9 +50,9 @@ def test_unit_force_needs_mass(tmp_path):
 def test_bad_input(tmp_path):
     csv = tmp_path / "b.csv"
     csv.write_text("time_s,position_m,force_kn\n1,0,0\n0.5,0,0\n")
-    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 2  # time going back
+    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 3  # time going back: input not valid
     csv.write_text("t,pos,f\n1,0,0\n")
-    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 2
+    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 3
 
 
 def test_fix_time_column_and_none(tmp_path):

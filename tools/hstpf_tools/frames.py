@@ -12,28 +12,8 @@ from typing import Dict, Optional, Tuple
 import cantools
 
 from . import e2e
+from .table1 import TABLE1  # Table 1 from lib/src/train_types.c; its index is DeclaredType/LeaderType
 
-# Table 1 of the paper, in the order of lib/src/train_types.c (the index is
-# what DeclaredType/LeaderType carry).
-TABLE1 = (
-    ("CRH1", 0.53, 0.0026, 0.000069),
-    ("CRH2", 0.88, 0.0074, 0.000114),
-    ("CRH3", 0.79, 0.0064, 0.000115),
-    ("CRH5", 0.69, 0.0063, 0.000146),
-    ("SS1/SS3/SS4", 2.25, 0.0190, 0.000320),
-    ("SS7", 1.40, 0.0038, 0.000348),
-    ("SS8", 1.02, 0.0035, 0.000426),
-    ("DF", 2.93, 0.0073, 0.000271),
-    ("DF4/DF4B/DF4C/DF7D", 2.28, 0.0293, 0.000178),
-    ("DF8", 2.40, 0.0022, 0.000391),
-    ("DF11", 0.86, 0.0054, 0.000218),
-    ("ND5", 1.31, 0.0167, 0.000391),
-    ("ND2", 2.98, 0.0202, 0.000033),
-    ("DFH3", 2.40, 0.0095, 0.000673),
-    ("Xian Feng", 1.65, 0.0001, 0.000179),
-    ("Star EMU Central Plains", 1.28, 0.0012, 0.000195),
-    ("China Star", 1.16, 0.00534, 0.000182),
-)
 TYPE_CUSTOM = 254
 TYPE_NONE = 255
 

@@ -12,12 +12,21 @@ def message(t: float, frame_id: int, data: bytes, channel: str = "vcan0") -> can
                        is_rx=False)
 
 
-def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") -> int:
-    """Writes messages with can.Logger (the file's suffix picks the format:
-    .log is candump -L). Returns the count."""
-    n = 0
+def log_writer(path: str, channel: str = "vcan0"):
+    """can.Logger for path (its suffix picks the format: .log is candump -L);
+    '-' is candump -L text on stdout."""
+    if str(path) == "-":
+        from .cli import stdout
+
+        return can.CanutilsLogWriter(stdout(), channel=channel)
     kw = {"channel": channel} if str(path).endswith(".log") else {}
-    with can.Logger(path, **kw) as log:
+    return can.Logger(path, **kw)
+
+
+def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") -> int:
+    """Writes messages with log_writer(). Returns the count."""
+    n = 0
+    with log_writer(path, channel) as log:
         for m in msgs:
             log.on_message_received(m)
             n += 1
@@ -25,6 +34,13 @@ def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") ->
 
 
 def read_log(path: str) -> List[can.Message]:
+    """Every message of a log python-can reads (by suffix); '-' is candump
+    -L text on stdin."""
+    if str(path) == "-":
+        from .cli import stdin
+
+        with can.CanutilsLogReader(stdin()) as r:
+            return list(r)
     with can.LogReader(path) as r:
         return list(r)
 

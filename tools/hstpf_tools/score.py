@@ -17,31 +17,34 @@ simulation time in one of two ways:
 """
 import argparse
 import csv
+import io
 import json
 import math
+import re
 import sys
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from . import e2e
+from . import cli, e2e, runconfig
 from .frames import (EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS,
                      HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE, FrameCodec, type_name)
-from .logio import read_log
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
+OUTPUT_SENDER = "HSTPF"  # the DBC node of the estimator: its frames are the outputs
+Z95 = 1.959963984540054  # two-sided 95 % of a normal distribution
 
 
 def read_truth(path: str) -> Dict[str, np.ndarray]:
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = list(csv.DictReader(io.StringIO(cli.read_text(path))))
     if not rows:
         raise ValueError(f"{path}: no rows")
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
+    out["identity"] = {k: r0[k] for k in ("type", "seed", "noise", "profile") if r0.get(k)}
     return out
 
 
@@ -97,7 +100,9 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
-            continue
+            if name is None or OUTPUT_SENDER not in (codec.message(name).senders or ()):
+                continue  # inputs and unknown IDs
+            series[name] = []  # an estimator frame this tool has no name for (e.g. the sd of the state)
         e2e_results.setdefault(name, {}).setdefault(res, 0)
         e2e_results[name][res] += 1
         if sig is None:
@@ -227,7 +232,51 @@ def metrics(series, truth) -> dict:
     return res
 
 
-def plots(series, truth, outdir: Path) -> List[str]:
+def sd_series(series, pattern: str) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """(times, sd) of the first output signal whose name matches `pattern`
+    (case-insensitive), in whichever estimator frame carries it; None when
+    no frame does or it never holds a positive sd (not yet published)."""
+    rx = re.compile(pattern, re.I)
+    for rows in series.values():
+        if not rows:
+            continue
+        sig = next((k for k in rows[0][1] if rx.fullmatch(k)), None)
+        if sig is None:
+            continue
+        t = np.array([r[0] for r in rows])
+        sd = np.array([float(r[1][sig]) for r in rows])
+        ok = np.isfinite(sd) & (sd > 0)
+        if ok.any():
+            return t[ok], sd[ok]
+    return None
+
+
+SD_SIGNALS = {  # signal-name patterns of the published standard deviations
+    "position": r"(est)?pos(ition)?_?sd(_?m)?", "speed": r"(est)?(speed|spd)_?sd(_?mps)?",
+    "c0": r"(est)?c0_?sd", "c1": r"(est)?c1_?sd", "c2": r"(est)?c2_?sd",
+}
+
+
+def run_title(truth) -> str:
+    """The run's identity for plot titles: true type, seed, noise (profile)."""
+    i = truth.get("identity", {})
+    parts = [f"truth {i.get('type', truth['theta'].name)}"]
+    parts += [f"{k} {i[k]}" for k in ("seed", "noise", "profile") if k in i]
+    return ", ".join(parts)
+
+
+def _mark_decision(ax, decision: Optional[float], declared: Optional[str], label: bool = True) -> None:
+    if decision is not None:
+        ax.axvline(decision, color="tab:red", ls=":", lw=1.2,
+                   label=f"declared {declared} at {decision:.0f} s" if label else None)
+
+
+def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Optional[float] = None,
+          declared: Optional[str] = None) -> List[str]:
+    """PNGs of the run: states (with 95 % bands when the estimator publishes
+    sd), model weights with the declaration threshold of `rule`
+    (runconfig.declaration), Davis coefficients and W(v). The decision time
+    is marked on every time axis; titles name the run."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -237,18 +286,30 @@ def plots(series, truth, outdir: Path) -> List[str]:
     files = []
     th_true: Theta = truth["theta"]
     tt = truth["time_s"]
+    who = run_title(truth)
+    rule = rule or {}
     st = [(t, s) for t, s in series[EST_STATE] if s["EstValid"] >= 0.5]
     if st:
         t = np.array([x[0] for x in st])
         fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8)
-        ax[0].set_ylabel("position error (m)")
+        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8,
+                   label="estimate - truth")
         ax[1].plot(tt, truth["speed_mps"] * 3.6, label="true", lw=1.2)
-        ax[1].plot(t, np.array([x[1]["EstSpeed"] for x in st]) * 3.6, label="estimate", lw=0.8)
+        v_est = np.array([x[1]["EstSpeed"] for x in st]) * 3.6
+        ax[1].plot(t, v_est, label="estimate", lw=0.8)
+        for a, key, centre, scale in ((ax[0], "position", np.zeros_like(t), 1.0), (ax[1], "speed", v_est, 3.6)):
+            sd = sd_series(series, SD_SIGNALS[key])
+            if sd is not None:
+                band = Z95 * scale * np.interp(t, *sd)
+                a.fill_between(t, centre - band, centre + band, color="tab:blue", alpha=0.2, lw=0,
+                               label="95 % band of the estimate")
+        for a in ax:
+            _mark_decision(a, decision, declared)
+            a.legend(fontsize=8)
+        ax[0].set_ylabel("position error (m)")
         ax[1].set_ylabel("speed (km/h)")
         ax[1].set_xlabel("time (s)")
-        ax[1].legend()
-        fig.suptitle("State estimate vs truth")
+        fig.suptitle(f"State estimate vs truth ({who})")
         files.append(_save(fig, outdir / "states.png"))
     if series[EST_TYPE]:
         t = np.array([x[0] for x in series[EST_TYPE]])
@@ -258,12 +319,16 @@ def plots(series, truth, outdir: Path) -> List[str]:
         for idx in sorted(set(lead.tolist())):
             sel = lead == idx
             ax.plot(t[sel], lw[sel], ".", ms=3, label=f"leader {type_name(idx)}")
-        ax.axhline(0.9, color="grey", ls="--", lw=0.8)
+        if rule.get("threshold") is not None:
+            hold = f", held {rule['hold_s']:g} s" if rule.get("hold_s") is not None else ""
+            ax.axhline(rule["threshold"], color="grey", ls="--", lw=0.8,
+                       label=f"declaration: q > {rule['threshold']:g}{hold} ({rule.get('source', '?')})")
+        _mark_decision(ax, decision, declared)
         ax.set_ylim(0, 1.05)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("model weight q")
-        ax.set_title(f"Leading model weight (truth {th_true.name})")
-        ax.legend()
+        ax.set_title(f"Leading model weight ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "weights.png"))
     thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
     if thf:
@@ -271,21 +336,31 @@ def plots(series, truth, outdir: Path) -> List[str]:
         fig, ax = plt.subplots(figsize=(9, 4))
         for k, c in (("C0", th_true.c0), ("C1", th_true.c1), ("C2", th_true.c2)):
             ax.plot(t, 100 * (np.array([x[1][k] for x in thf]) - c) / c, label=k.lower())
-        ax.axhspan(-5, 5, color="green", alpha=0.1)
+        ax.axhspan(-5, 5, color="green", alpha=0.1, label="+-5 %")
+        _mark_decision(ax, decision, declared)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("relative error (%)")
-        ax.set_title("Estimated Davis coefficients")
-        ax.legend()
+        ax.set_title(f"Estimated Davis coefficients ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "theta.png"))
         s = thf[-1][1]
         est = Theta("estimate", s["C0"], s["C1"], s["C2"])
         fig, ax = plt.subplots(figsize=(7, 4))
-        ax.plot(V_GRID_KMH, th_true.resistance(V_GRID_KMH / 3.6), label=f"true ({th_true.name})")
-        ax.plot(V_GRID_KMH, est.resistance(V_GRID_KMH / 3.6), "--", label="estimate (final)")
+        vk = V_GRID_KMH
+        ax.plot(vk, th_true.resistance(vk / 3.6), label=f"true ({th_true.name})")
+        w_est = est.resistance(vk / 3.6)
+        ax.plot(vk, w_est, "--", label="estimate (final)")
+        sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
+        if all(x is not None for x in sds):
+            # final sd of each coefficient; their covariances are not published, so this band treats
+            # them as independent: var W = sum_k (V^k sd_k)^2
+            band = Z95 * np.sqrt(sum((vk ** k * x[1][-1]) ** 2 for k, x in enumerate(sds)))
+            ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
+                            label="95 % band (coefficients independent)")
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel("W (N/kN)")
-        ax.set_title("Running resistance")
-        ax.legend()
+        ax.set_title(f"Running resistance ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "resistance.png"))
     return files
 
@@ -300,17 +375,21 @@ def _save(fig, path: Path) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
-                                epilog=__doc__.split("\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("log", help="recorded log with the estimator's frames")
+    p = cli.Parser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
+                   epilog=__doc__.split("\n", 2)[2] + "\nExit codes: 0 done, 2 usage, 3 an input cannot be read "
+                   "or is not valid, 5 no estimator frame in the log, 6 an output cannot be written (docs/tools.md).",
+                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("log", help="recorded log with the estimator's frames; '-': candump text on stdin")
     p.add_argument("--truth", required=True, help="truth CSV from hstpf-simulate")
     p.add_argument("--input-log", help="the simulated input log (for --align inputs)")
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
     p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
-    p.add_argument("--json", help="write the metrics as JSON here ('-' for stdout)")
+    cli.add_json_argument(p, what="the metrics as JSON", default=" (the table then goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
+    p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
+                   "are drawn on the weights plot (default: the library's defaults)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     return p
 
@@ -323,23 +402,32 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def main(argv=None) -> int:
+def _main(argv) -> int:
     a = build_parser().parse_args(argv)
     align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
     if align == "inputs" and not a.input_log:
-        print("hstpf-score: --align inputs needs --input-log", file=sys.stderr)
-        return 2
-    codec = FrameCodec(a.dbc, timeout_s=math.inf)
+        raise cli.CliError(cli.EXIT_USAGE, "--align inputs needs --input-log")
+    if a.speed <= 0:
+        raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
+    if [a.log, a.input_log, a.truth].count("-") > 1:
+        raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
+    try:
+        codec = FrameCodec(a.dbc, timeout_s=math.inf)
+    except Exception as exc:  # missing or unreadable DBC
+        raise cli.input_error(a.dbc or "the DBC", exc) from exc
     input_map: Dict[bytes, float] = {}
     if align == "inputs":
-        inp = read_log(a.input_log)
+        inp = cli.load_log(a.input_log)
         pos_id = codec.message(POSITION).frame_id
         t_first = inp[0].timestamp if inp else 0.0
         for m in inp:
             if m.arbitration_id == pos_id:
                 input_map.setdefault(bytes(m.data), m.timestamp - t_first)
-    truth = read_truth(a.truth)
-    rec = read_log(a.log)
+    try:
+        truth = read_truth(a.truth)
+    except (KeyError, ValueError, IndexError) as exc:
+        raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
+    rec = cli.load_log(a.log)
     series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
     res["inputs"] = fix_time_stats(rec, a.dbc)
@@ -348,22 +436,33 @@ def main(argv=None) -> int:
     res["state_frames_dated"] = series.pop("dated_by_est_time")
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
-        res["plots"] = plots(series, truth, Path(a.plots))
+        try:
+            rule = runconfig.declaration(a.config)
+            res["plots"] = plots(series, truth, Path(a.plots), rule, res.get("decision_time_s"),
+                                 res.get("declared_type"))
+        except OSError as exc:
+            raise cli.output_error(a.plots, exc) from exc
+    table = sys.stderr if a.json == "-" else sys.stdout  # '--json -': nothing but JSON on stdout
     for k, v in res.items():
         if k not in ("output_e2e", "health", "frames", "inputs"):
-            print(f"{k:38s} {_fmt(v)}")
+            print(f"{k:38s} {_fmt(v)}", file=table)
     if "health" in res:
-        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()))
-    print("inputs".ljust(38), json.dumps(res["inputs"]))
+        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()), file=table)
+    if "inputs" in res:
+        print("inputs".ljust(38), json.dumps(res["inputs"]), file=table)
     bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
-    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}))
+    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}), file=table)
     if a.json:
-        text = json.dumps(res, indent=1)
-        if a.json == "-":
-            print(text)
-        else:
-            Path(a.json).write_text(text + "\n")
-    return 0
+        cli.emit_report(res, a.json)
+    if not any(res["frames"].values()):
+        print(f"hstpf-score: no estimator frame in {a.log}" + (" could be timed by its inputs"
+              if align == "inputs" and e2e_res else ""), file=sys.stderr)
+        return cli.EXIT_NO_TRAFFIC
+    return cli.EXIT_OK
+
+
+def main(argv=None) -> int:
+    return cli.run("hstpf-score", _main, argv)
 
 
 if __name__ == "__main__":
