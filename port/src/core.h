@@ -20,7 +20,7 @@
  * the daemon takes "has a fix" for the lock, publishes no sd (null, and
  * QualValid 0) and restarts with hstpf_reset(). */
 #ifndef HSTPFD_LIB_LOCK_API
-#define HSTPFD_LIB_LOCK_API 0
+#define HSTPFD_LIB_LOCK_API 1
 #endif
 
 /* Sends one frame; returns 0, HSTPFD_SEND_OFFLINE if there is no open
