@@ -103,7 +103,7 @@ int genlog(const genlog_t *g)
             p.position = hstpf_frames_position_position_raw(y);
             if (!g->no_fix_time) { /* the measurement's own time, ms modulo the wrap */
                 p.fix_time_valid = 1;
-                p.fix_time = (uint16_t)((k * 1000 + j * 100) % HSTPF_FIX_TIME_WRAP_MS);
+                p.fix_time = (uint16_t)((unsigned)(k * 1000 + j * 100) % HSTPF_FIX_TIME_WRAP_MS);
             }
             (void)hstpf_can_position_pack(d, &p, 8);
             (void)hstpf_e2e_protect(&tx_pos, d, 8);

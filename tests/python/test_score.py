@@ -197,7 +197,7 @@ def test_est_time_dates_late_outputs(sim, tmp_path, dated):
     assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
     res = json.loads(js.read_text())
     if dated:
-        assert res["state_frames_dated"] == res["state_frames"] > 300
+        assert res["state_frames_dated"] >= res["state_frames"] > 300
         assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
         assert res["speed_rms_mps"] == pytest.approx(0.1, abs=0.006)
     else:

@@ -70,11 +70,16 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
-    # simulation seconds per bus second (the replay's speed-up), for dating
-    # by EstTime: where the estimate should lie given how long after the
-    # latest input it came
-    in_sim = [input_map[bytes(m.data)] for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
-    rate = float(np.polyfit(in_ts, in_sim, 1)[0]) if len(in_ts) > 10 and np.ptp(in_ts) > 0 else 1.0
+    # For dating by EstTime: simulation time as the bus clock runs, from the
+    # inputs with the least latency (as hstpfd's fix clock does): rate =
+    # the replay's speed-up, lag = the least latency. An estimator steps on
+    # that clock, so an estimate lies near sim_of(its bus time).
+    in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
+                       if m.arbitration_id == pos_id and bytes(m.data) in input_map])
+    rate, lag = 1.0, 0.0
+    if len(in_ts) > 10 and np.ptp(in_ts) > 0:
+        rate = float(np.polyfit(in_ts, in_sim, 1)[0])
+        lag = float(np.min(rate * np.array(in_ts) - in_sim))
     pos_msg = codec.message(POSITION)
     fix_in: Optional[int] = None  # FixTime of the latest matched input
     pending = None  # an EstState waiting for the EstQuality frame that dates it
@@ -111,10 +116,10 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
                 and t_sim is not None:
             # the estimate's own time, on the fix clock: the time with that
-            # FixTime nearest to where the bus time puts it (a predict-only
-            # step may end seconds after the latest input; an estimator may
-            # lag it): within half a wrap of that
-            expect_ms = (m.timestamp - t_in) * rate * 1000.0  # how far past the latest input
+            # FixTime nearest to where the bus clock puts it (predict-only
+            # steps may run seconds past inputs that come late; an estimator
+            # may lag): within half a wrap of that
+            expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
             d = (int(sig["EstTime"]) - fix_in - expect_ms) % FIX_TIME_WRAP_MS
             if d > FIX_TIME_WRAP_MS / 2:
                 d -= FIX_TIME_WRAP_MS
