@@ -11,9 +11,11 @@ cd "$root"
 build=$1
 md=${2:-}
 
-# Floors, percent of branches taken (raise them here; docs/quality.md).
+# Floors, percent of branches taken, set at the measured values (the goal
+# is lib/ 95, port/src/ 85: docs/quality.md lists the gap per file);
+# raising one is this one-line change.
 LIB_FLOOR=93
-PORT_FLOOR=72
+PORT_FLOOR=82
 
 command -v gcovr >/dev/null || { echo "coverage: gcovr not installed (tools/setup.sh installs it)" >&2; exit 2; }
 
