@@ -210,8 +210,8 @@ static void test_sniff(void **state)
  * spellings and errors of the reader. */
 static void test_sizes_and_spellings(void **state)
 {
-    static const char *const lines[] = {"(1.000000) vcan0 123#DEADBEEF\n", "(1.000000) vcan0 123##0" "0011223344556677"
-                                                                          "8899AABB\n",
+    static const char *const lines[] = {"(1.000000) vcan0 123#DEADBEEF\n",
+                                        "(1.000000) vcan0 123##000112233445566778899AABB\n",
                                         "(1.000000) vcan0 20000004#R\n", "(1.000000) vcan0 123#R8\n"};
     char buf[256], part[256], ifc[4];
     hstpfd_frame_t f;
@@ -246,7 +246,7 @@ static void test_sizes_and_spellings(void **state)
             "(1.0) vcan0 123#00 Rx",          /* no blank after the direction */
             "(1.0) vcan0 G23#00",             /* no hex id */
             "(1.0) vcan0 123##",              /* FD without its flags digit */
-            "(1.0) vcan0 123##1" "001122334455667788", /* 9 bytes: no FD length */
+            "(1.0) vcan0 123##1001122334455667788", /* 9 bytes: no FD length */
         };
         for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
             if (hstpfd_candump_parse(bad[i], &f, NULL, 0) != HSTPFD_CANDUMP_BAD) {
