@@ -120,4 +120,5 @@ def test_stalled_replay_offline(root, tmp_path, fix_time):
         assert res["position_rms_m"] < 5 ** 0.5  # the HIL stage's bound
     else:
         assert res["state_frames_dated"] == 0
-        assert res["position_rms_m"] > 10.0
+        # dated by receive stamps, the same replay breaks the HIL bound
+        assert res["position_rms_m"] > 5 ** 0.5
