@@ -306,8 +306,9 @@ static void moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     }
     m->s_mean = (real)s1;
     m->v_mean = (real)v1;
-    (void)s2; /* posterior variances: for s_var / v_var */
-    (void)v2;
+    m->s_var = (real)(s2 - s1 * s1 > 0.0 ? s2 - s1 * s1 : 0.0);
+    m->v_var = (real)(v2 - v1 * v1 > 0.0 ? v2 - v1 * v1 : 0.0);
+    m->held = 0; /* the grid engine does not implement the standstill rules yet */
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
@@ -315,11 +316,10 @@ static void moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
 
 /* A model at the fix yr: s = yr - e with e the measurement noise, v from
  * N(v0, init_speed_sd); cell masses from the two CDFs. */
-static void place_one(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+static void place_at(hstpf_t *f, hstpf_model_t *m, real yr, real v0, real sdv)
 {
     const uint16_t l = (uint16_t)(m - f->m);
     real *p = f->grid.p[l], *g = geom(f, l);
-    const real sdv = (real)f->cfg.init_speed_sd;
     const real zl = tail_quantile(&f->unit, 0), zh = tail_quantile(&f->unit, 1);
     real s_lo = yr - tail_quantile(&f->de, 1), s_hi = yr - tail_quantile(&f->de, 0);
     real v_lo = v0 + sdv * zl, v_hi = v0 + sdv * zh, tot = 0;
@@ -363,11 +363,60 @@ static void place_one(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
     moments(f, m, l);
 }
 
-static void place_all(hstpf_t *f, real yr, real v0)
+/* Mean and variance of a noise table, by its own inverse CDF at 256
+ * evenly spaced probabilities (any kind of density; init-time accuracy is
+ * enough for an acquisition's spread). */
+static void dist_moments(const hstpf_dist_t *d, double *mean, double *var)
+{
+    double s1 = 0.0, s2 = 0.0;
+    uint32_t k;
+    for (k = 0; k < 256u; ++k) {
+        const double x = (double)hstpf__dist_sample(d, (k << 24) + (1u << 23));
+        s1 += x;
+        s2 += x * x;
+    }
+    *mean = s1 / 256.0;
+    *var = s2 / 256.0 - *mean * *mean;
+    *var = *var > 0.0 ? *var : 0.0;
+}
+
+/* From the acquisition fixes: one fix with the configured speed prior, or
+ * two fixes t apart with the speed of the model's Euler step from the first
+ * to the second, v = (y2 - y1 - mu_s)/t + t a + mu_v, and its sd from the
+ * measurement noise, sqrt(2 Var e + Var w_s)/t, taken independent of the
+ * position (an approximation of the two-fix posterior, whose s-v
+ * correlation the product grid does not hold). */
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+{
+    const hstpf_config_t *c = &f->cfg;
+    if (q->t12 > 0.0) {
+        const double t = q->t12, sc = sqrt(t / c->dt_nominal_s);
+        double me, ve, ms, vs, mv, vv;
+        dist_moments(&f->de, &me, &ve);
+        dist_moments(&f->ds, &ms, &vs);
+        dist_moments(&f->dv, &mv, &vv);
+        vs *= sc * sc;
+        (void)me;
+        (void)vv;
+        {
+        const double v1 = (q->y2 - q->y1 - sc * ms) / t;
+        const double vk = 3.6 * (v1 > 0.0 ? v1 : 0.0);
+        double a = q->xu - f->xi * (f->theta[m - f->m].c0 + f->theta[m - f->m].c1 * vk +
+                                   f->theta[m - f->m].c2 * vk * vk);
+        double v2 = v1 + t * a + sc * mv;
+        v2 = v2 > 0.0 ? v2 : 0.0;
+        place_at(f, m, (real)q->y2, (real)v2, (real)(sqrt(2.0 * ve + vs) / t));
+        }
+    } else {
+        place_at(f, m, (real)q->y2, (real)q->v0, (real)c->init_speed_sd);
+    }
+}
+
+static void place_all(hstpf_t *f, const hstpf__acq_t *q)
 {
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
-        place_one(f, &f->m[l], yr, v0);
+        place_one(f, &f->m[l], q);
     }
 }
 
@@ -853,7 +902,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         model_pass(f, m, st, acc);
     }
     if (!(mass_of(f->grid.p[l]) > (real)0)) {
-        place_one(f, m, st->has_y ? (real)st->yr : m->s_mean, v_was);
+        place_at(f, m, st->has_y ? (real)st->yr : m->s_mean, v_was, (real)f->cfg.init_speed_sd);
         m->loglik = st->has_y ? f->de.floor : (real)0;
         m->floor_hits = hits + (st->has_y ? 1u : 0u);
         m->floor_run = (uint16_t)(run + (st->has_y ? 1u : 0u));
