@@ -38,7 +38,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->max_gap_s = 30.0;
     cfg->gate_m = 1000.0;
     cfg->reacquire_after = 5;
-    cfg->refine = 0; /* opt-in: docs/results.md measures what it costs */
+    cfg->refine = 1;
     cfg->refine_prior_q = 0.01;
     cfg->refine_spread = 0.2;
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */

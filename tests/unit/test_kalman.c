@@ -92,6 +92,7 @@ static double ekf_update(ekf_t *k, double y, double r)
 static void config(hstpf_config_t *c, hstpf_engine_t engine)
 {
     assert_int_equal(hstpf_config_default(c), HSTPF_OK);
+    c->refine = 0; /* the rows' weights against the textbook EKF's */
     models[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
     models[1] = hstpf_train_types[hstpf_train_type_find("SS8")];
     c->models = models;

@@ -251,8 +251,9 @@ typedef struct {
     /** 1: besides the rows, the bank weighs one continuous hypothesis, a
      *  train near the table but on no row: an augmented EKF on (s, v, c0,
      *  c1, c2, k) with Table 1 as prior (docs/model.md). Used with the
-     *  Kalman engine only (ignored otherwise). 0: rows only (0: it slows
-     *  the identification of on-table trains, docs/results.md). */
+     *  Kalman engine only (ignored otherwise). 0: rows only (1: a train
+     *  off every row is then seldom declared a wrong type; it costs some
+     *  identification speed on the table, docs/results.md). */
     uint8_t refine;
     /** Prior weight of the continuous hypothesis, [0, 0.5] (0.01). */
     double refine_prior_q;
