@@ -28,8 +28,19 @@ for s in stops day start300 clock+30 clock-30 outage gain5; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
-echo "== particle engine on the Gaussian cases (the paper's method)"
-for s in paper1 all17; do
+echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"
+for s in off10 off15 off20 grade8; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+done
+echo "== on-table figures without the continuous hypothesis"
+for s in paper1 all17 stops; do
+  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+done
+.venv/bin/python tools/figures/theta_limit.py --json "$out/theta_limit.json" | tee "$out/theta_limit.txt"
+echo "== particle engine on the Gaussian cases (the paper's method) and on Case 2"
+for s in paper1 all17 paper2; do
   "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --engine particle | tee "$out/$s-particle.txt"
 done
 echo "== declaration rule (17 types, both engines)"
@@ -56,7 +67,7 @@ echo "== Case 2 ablation"
            "M = 256:--e-blur 0.2 --rough 0.7 --particles 256"; do
     name=${v%%:*}; args=${v#*:}
     # shellcheck disable=SC2086
-    row=$("$mc" --scenario paper2 --seeds "$seeds" $args 2>/dev/null | tail -1) || true
+    row=$("$mc" --scenario paper2 --seeds "$seeds" --engine particle $args 2>/dev/null | tail -1) || true
     [[ $row == CRH3* ]] || { echo "ablation '$name' failed: hstpf-mc --scenario paper2 $args" >&2; exit 1; }
     echo "$name | $row"
   done

@@ -738,7 +738,7 @@ static void usage(void)
             "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
-            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine]\n"
+            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine]\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -777,8 +777,9 @@ int main(int argc, char **argv)
             progress = progress ? progress : 2; /* 2: asked for, not a terminal */
             continue;
         }
-        if (!strcmp(a, "--refine")) {
-            st.base.refine = 1; /* the continuous-theta hypothesis (docs/model.md) */
+        if (!strcmp(a, "--refine") || !strcmp(a, "--no-refine")) {
+            /* the continuous-theta hypothesis (docs/model.md; on by default) */
+            st.base.refine = (uint8_t)(a[2] == 'r');
             continue;
         }
         if (v == NULL) {
