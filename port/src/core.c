@@ -844,6 +844,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "decimated", (unsigned long)s->decimated, 1);
     kv(fp, "split", (unsigned long)s->split, 0);
     kv(fp, "fix_dated", (unsigned long)s->fix_dated, 0);
+    kv(fp, "fix_clock_steps", (unsigned long)s->fix_clock_steps, 0);
     kv(fp, "reacquire", (unsigned long)c->n.reacquire, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);

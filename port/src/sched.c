@@ -201,6 +201,7 @@ void hstpfd_sched_clock_step(hstpfd_sched_t *s, int64_t t_us, int dir)
         s->restart_next = 1;
     }
     s->have_fix = 0; /* the fix clock starts again from the next fix */
+    s->lagging = 0;
 }
 
 void hstpfd_sched_time(hstpfd_sched_t *s, int64_t t_us)
@@ -229,6 +230,36 @@ static int64_t floor_div(int64_t a, int64_t b)
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
+/* A fix later than the least latency by more than LAG_STEP_US, and fixes
+ * that stay so late for LAG_HOLD_US of receive time while they keep coming
+ * (a stall's backlog arrives in a burst, then latency is back): the receive
+ * clock stepped forward by the smallest of those delays. The fix clock then
+ * takes the new offset, so that the traction, dated by the receive clock,
+ * and the fixes share one time again; the gap this leaves between steps is
+ * the library's to handle (beyond max_gap_s it re-acquires). */
+#define LAG_STEP_US INT64_C(1000000)
+#define LAG_HOLD_US INT64_C(3000000)
+static void lag_check(hstpfd_sched_t *s, int64_t t_rx)
+{
+    const int64_t excess = (t_rx - s->fix_u) - s->fix_off;
+    if (excess <= LAG_STEP_US) {
+        s->lagging = 0;
+        return;
+    }
+    if (!s->lagging) {
+        s->lagging = 1;
+        s->lag_rx = t_rx;
+        s->lag_min = excess;
+    } else if (excess < s->lag_min) {
+        s->lag_min = excess;
+    }
+    if (t_rx - s->lag_rx >= LAG_HOLD_US) {
+        s->fix_off += s->lag_min;
+        s->lagging = 0;
+        ++s->n.fix_clock_steps;
+    }
+}
+
 /* Timeline time of a fix received at t_rx (see the rules in sched.h). */
 static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_sequence)
 {
@@ -250,6 +281,7 @@ static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_
             d += floor_div(t_rx - s->fix_rx - d + FIX_WRAP_US / 2, FIX_WRAP_US) * FIX_WRAP_US;
         }
         s->fix_u += d;
+        lag_check(s, t_rx);
         /* least latency seen; creeps up by 100 ppm so a drifting clock is followed */
         off = s->fix_off + (t_rx - s->fix_rx) / 10000;
         if (t_rx - s->fix_u < off) {

@@ -94,6 +94,7 @@ typedef struct {
     uint32_t fix_dated;        /* positions dated by their fix time */
     uint32_t clock_fwd;        /* receive clock steps forward (the daemon's guard) */
     uint32_t clock_back;       /* receive clock steps back */
+    uint32_t fix_clock_steps;  /* forward receive-clock steps found by the fixes' latency */
 } hstpfd_sched_counts_t;
 
 typedef struct {
@@ -117,6 +118,11 @@ typedef struct {
     uint8_t have_fix;
     int32_t fix_ms_last;
     int64_t fix_u, fix_rx, fix_off;
+    /* fixes all received later than the least latency by more than a
+     * second, since lag_rx, by at least lag_min: a receive clock that
+     * stepped forward (a stall's backlog drains in a burst and ends it) */
+    uint8_t lagging;
+    int64_t lag_rx, lag_min;
     uint8_t restart_next; /* a clock step: the next position restarts the estimator */
     const volatile sig_atomic_t *stop; /* loops end when *stop (may be NULL) */
     hstpfd_sched_counts_t n;

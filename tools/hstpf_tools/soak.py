@@ -443,9 +443,11 @@ def check(steps_path: str, summary_path: str, stem: str, run_rec: Optional[dict]
 
     # counts against the plan
     inj = plan["injected_totals"]
-    # hstpfd counts a forward step only beyond max_gap_s (30 s in the
-    # configs used here); a shorter one acts as a silence (docs/daemon.md)
+    # hstpfd counts a forward step beyond max_gap_s (30 s in the configs used
+    # here) by the receive clock, and every forward step by the fixes'
+    # latency (scheduler.fix_clock_steps; docs/daemon.md)
     n_fwd = sum(1 for s in plan["clock_steps"] if s["delta_s"] > 30.0)
+    n_small_fwd = sum(1 for s in plan["clock_steps"] if 0 < s["delta_s"] <= 30.0)
     n_back = sum(1 for s in plan["clock_steps"] if s["delta_s"] < 0)
     fa, sch = summary.get("faults", {}), summary.get("scheduler", {})
     expect = {
@@ -454,6 +456,7 @@ def check(steps_path: str, summary_path: str, stem: str, run_rec: Optional[dict]
         ("faults", "unknown_id"): inj.get("unknown", 0),
         ("faults", "clock_steps_forward"): n_fwd,
         ("faults", "clock_steps_back"): n_back,
+        ("scheduler", "fix_clock_steps"): n_small_fwd,
     }
     for (grp, key), want in expect.items():
         got = summary.get(grp, {}).get(key)
@@ -520,7 +523,7 @@ def check(steps_path: str, summary_path: str, stem: str, run_rec: Optional[dict]
         "speed_error_mps": stats(err_v), "worst": worst, "k_sd": k_sd,
         "clock_steps": {"injected_forward": n_fwd, "injected_back": n_back,
                         "counted_forward": fa.get("clock_steps_forward"), "counted_back": fa.get("clock_steps_back"),
-                        },
+                        "found_by_fix_time": sch.get("fix_clock_steps")},
         "faults": {"injected": inj, "pos_invalid_frames": plan["pos_invalid_frames"],
                    "counted": {k: v for k, v in fa.items() if v}},
         "reacquire": sch.get("reacquire"), "restarts": sch.get("restarts"),
