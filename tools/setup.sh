@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what hstpf needs on a Debian machine: build tools, cmocka, the
-# Cortex-M4F cross compiler, QEMU and busybox for the vcan VM, and a Python
+# Cortex-M4F cross compiler, QEMU and busybox for the vcan VM, clang with its
+# sanitizer/libFuzzer runtime, gcc-multilib (-m32), gcovr, and a Python
 # venv (.venv) with the tools. Idempotent and quiet when all is there.
 # Sourced by tools/test.sh and tools/main.sh.
 set -euo pipefail
@@ -9,7 +10,8 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 debs=(cmake ninja-build gcc libc6-dev make pkg-config libcmocka-dev
       gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
       qemu-system-x86 qemu-system-arm busybox-static cpio kmod iproute2
-      python3 python3-venv python3-pip)
+      python3 python3-venv python3-pip
+      clang libclang-rt-14-dev gcc-multilib gcovr)
 missing=()
 for p in "${debs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -339,9 +339,9 @@ static double quantile(const hstpf_dist_spec_t *sp, double mass, double prob, in
         b = sp->mean + 40.0 * sp->sd;
         break;
     case HSTPF_DIST_GAMMA:
-        logscale = 1;
+        logscale = 1; /* in log((x - loc) / scale): the bracket is in scales */
         a = -745.0;
-        b = log(sp->scale * (sp->shape + 40.0 * sqrt(sp->shape) + 800.0));
+        b = log(sp->shape + 40.0 * sqrt(sp->shape) + 800.0);
         break;
     default:
         a = sp->table_x[0];
@@ -386,6 +386,14 @@ static int finite_d(double x)
     return isfinite(x) ? 1 : 0;
 }
 
+/* A spread (sd, scale, support width, soft edge) the float tables can hold
+ * around an offset (mean, location, table end). */
+static int spread_ok(double spread, double offset)
+{
+    return spread >= HSTPF_DIST_SPREAD_MIN && spread <= HSTPF_DIST_SPREAD_MAX &&
+           spread >= HSTPF_DIST_REL_MIN * fabs(offset);
+}
+
 int32_t hstpf__dist_check(const hstpf_dist_spec_t *sp)
 {
     uint16_t j;
@@ -395,7 +403,8 @@ int32_t hstpf__dist_check(const hstpf_dist_spec_t *sp)
     if (!finite_d(sp->floor_depth) || !finite_d(sp->edge_soft)) {
         return HSTPF_E_NONFINITE;
     }
-    if (sp->floor_depth < 0.0 || sp->edge_soft < 0.0) {
+    if (sp->floor_depth < 0.0 || sp->floor_depth > HSTPF_DIST_FLOOR_MAX || sp->edge_soft < 0.0 ||
+        (sp->edge_soft > 0.0 && !spread_ok(sp->edge_soft, 0.0))) {
         return HSTPF_E_DIST;
     }
     switch (sp->kind) {
@@ -403,12 +412,15 @@ int32_t hstpf__dist_check(const hstpf_dist_spec_t *sp)
         if (!finite_d(sp->mean) || !finite_d(sp->sd)) {
             return HSTPF_E_NONFINITE;
         }
-        return sp->sd > 0.0 ? HSTPF_OK : HSTPF_E_DIST;
+        return fabs(sp->mean) <= HSTPF_DIST_X_MAX && spread_ok(sp->sd, sp->mean) ? HSTPF_OK : HSTPF_E_DIST;
     case HSTPF_DIST_GAMMA:
         if (!finite_d(sp->shape) || !finite_d(sp->scale) || !finite_d(sp->loc)) {
             return HSTPF_E_NONFINITE;
         }
-        return (sp->shape >= 1e-3 && sp->shape <= 1e4 && sp->scale > 0.0) ? HSTPF_OK : HSTPF_E_DIST;
+        return (sp->shape >= 1e-3 && sp->shape <= 1e4 && fabs(sp->loc) <= HSTPF_DIST_X_MAX &&
+                spread_ok(sp->scale, sp->loc))
+                   ? HSTPF_OK
+                   : HSTPF_E_DIST;
     case HSTPF_DIST_TABLE:
         if (sp->table_x == NULL || sp->table_p == NULL) {
             return HSTPF_E_NULL;
@@ -420,11 +432,18 @@ int32_t hstpf__dist_check(const hstpf_dist_spec_t *sp)
             if (!finite_d(sp->table_x[j]) || !finite_d(sp->table_p[j])) {
                 return HSTPF_E_NONFINITE;
             }
-            if (sp->table_p[j] < 0.0 || (j > 0u && !(sp->table_x[j] > sp->table_x[j - 1u]))) {
+            if (sp->table_p[j] < 0.0 || fabs(sp->table_x[j]) > HSTPF_DIST_X_MAX ||
+                (j > 0u && !(sp->table_x[j] > sp->table_x[j - 1u]))) {
                 return HSTPF_E_DIST;
             }
         }
-        return table_mass(sp) > 0.0 ? HSTPF_OK : HSTPF_E_DIST;
+        {
+            const double x0 = sp->table_x[0], x1 = sp->table_x[sp->table_n - 1u];
+            const double mass = table_mass(sp); /* overflows to inf for huge densities */
+            return spread_ok(x1 - x0, fabs(x0) > fabs(x1) ? x0 : x1) && mass > 0.0 && finite_d(mass)
+                       ? HSTPF_OK
+                       : HSTPF_E_DIST;
+        }
     default:
         return HSTPF_E_DIST;
     }
@@ -520,17 +539,24 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *sp)
         break;
     default: {
         uint16_t j;
-        double m1 = 0.0, m2 = 0.0;
+        double m0 = 0.0, m1 = 0.0, m2 = 0.0, pmax = 0.0;
+        const double x0 = sp->table_x[0];
         d->hard[0] = d->hard[1] = 1u;
-        /* exact moments of a piecewise-linear density */
+        for (j = 0; j < sp->table_n; ++j) {
+            pmax = sp->table_p[j] > pmax ? sp->table_p[j] : pmax;
+        }
+        /* exact moments of a piecewise-linear density, about x[0] and with
+         * p / max p: no overflow for densities up to 1e308 or offsets 1e9 */
         for (j = 0; j + 1u < sp->table_n; ++j) {
-            const double a = sp->table_x[j], b = sp->table_x[j + 1u];
-            const double pa = sp->table_p[j], pb = sp->table_p[j + 1u], h = b - a;
+            const double a = sp->table_x[j] - x0, b = sp->table_x[j + 1u] - x0;
+            const double pa = sp->table_p[j] / pmax, pb = sp->table_p[j + 1u] / pmax, h = b - a;
+            m0 += 0.5 * (pa + pb) * h;
             m1 += h * (pa * (2.0 * a + b) + pb * (a + 2.0 * b)) / 6.0;
             m2 += h * (pa * (3.0 * a * a + 2.0 * a * b + b * b) + pb * (a * a + 2.0 * a * b + 3.0 * b * b)) / 12.0;
         }
-        mean = m1 / mass;
-        var = m2 / mass - mean * mean;
+        mean = m1 / m0;
+        var = m2 / m0 - mean * mean;
+        mean += x0;
         break;
     }
     }
@@ -562,32 +588,65 @@ hstpf_real_t hstpf_exp_neg(hstpf_real_t x)
     return hstpf__exp_neg(x);
 }
 
-/* Density of Gamma(k, th) + N(0, sd) at x (loc removed), by quadrature:
- * near the Gamma's edge in u = (g/th)^k, where its density is bounded (the
- * edge singularity removed), then in g with steps of sd/16. Init time only. */
-static double gamma_blur_pdf(double k, double th, double sd, double x, double gmax)
+/* Density of Gamma(k, th) + N(0, sd) at x (loc removed), by quadrature.
+ * For shape k < 1 the part [0, gc = sd] is integrated in u = (g/th)^k,
+ * where the density is bounded (the edge singularity removed). The rest,
+ * up to gmax, on a fixed midpoint grid of steps h = min(sd, sv) / 16, sv
+ * the scale on which the Gamma's density varies; only the steps within
+ * x +- 9 sd (the kernel's mass beyond is below 1e-17) and above glo (the
+ * Gamma's mass below is negligible) are visited, so the work per node is
+ * bounded whatever th / sd: 2 x 9 x 16 steps when sd <= sv, else the
+ * Gamma's own span [glo, gmax] in steps of sv / 16 (about 1500 at most).
+ * Init time only. */
+#define BLUR_Z 9.0
+#define BLUR_STEPS 16.0
+#define BLUR_NU 256
+#define BLUR_MAX_STEPS 1e7 /* never reached in the ranges; keeps the casts defined */
+typedef struct {
+    double k, th, sd;  /* shape, scale, blur */
+    double gc, gmax;   /* u-part [0, gc]; grid part [gc, gmax] */
+    double glo;        /* no Gamma mass worth counting below */
+    double dg, ng;     /* grid step and number of steps */
+    double ig, lnorm;  /* 1 / (Gamma(k) th^k) and its log */
+} blur_q_t;
+
+static double gamma_blur_pdf(const blur_q_t *q, double x)
 {
-    const int nu = 256;
-    const double gc = sd < gmax ? sd : gmax, umax = pow(gc / th, k);
+    const double k = q->k, th = q->th, sd = q->sd;
     const double inorm = 1.0 / (sd * sqrt(2.0 * 3.14159265358979323846));
-    const double ig = 1.0 / (exp(lgamma(k)) * pow(th, k)); /* p_G(g) = ig g^(k-1) e^(-g/th) */
-    const double lgk1 = lgamma(k + 1.0);
-    double acc = 0.0, z, dg;
-    int j, ng;
-    for (j = 0; j < nu; ++j) {
+    double acc = 0.0, z, jlo, jhi;
+    int j, j0, j1;
+    if (q->gc > 0.0) {
         /* p_G dg = e^(-g/th) du / Gamma(k + 1) */
-        const double u = umax * ((double)j + 0.5) / (double)nu, g = th * pow(u, 1.0 / k);
-        z = (x - g) / sd;
-        acc += exp(-g / th - lgk1) * (umax / (double)nu) * exp(-0.5 * z * z) * inorm;
-    }
-    ng = (int)ceil((gmax - gc) / (sd / 16.0));
-    if (ng > 0) {
-        dg = (gmax - gc) / (double)ng;
-        for (j = 0; j < ng; ++j) {
-            const double g = gc + dg * ((double)j + 0.5);
+        const double umax = pow(q->gc / th, k);
+        const double lgk1 = lgamma(k + 1.0);
+        for (j = 0; j < BLUR_NU; ++j) {
+            const double u = umax * ((double)j + 0.5) / (double)BLUR_NU, g = th * pow(u, 1.0 / k);
             z = (x - g) / sd;
-            if (z > -9.0 && z < 9.0) {
-                acc += ig * pow(g, k - 1.0) * exp(-g / th) * dg * exp(-0.5 * z * z) * inorm;
+            acc += exp(-g / th - lgk1) * (umax / (double)BLUR_NU) * exp(-0.5 * z * z) * inorm;
+        }
+    }
+    if (q->ng < 1.0) {
+        return acc;
+    }
+    /* the grid steps that can lie within x +- 9 sd, one spare on each side */
+    jlo = floor(((x - BLUR_Z * sd > q->glo ? x - BLUR_Z * sd : q->glo) - q->gc) / q->dg) - 1.0;
+    jhi = ceil((x + BLUR_Z * sd - q->gc) / q->dg) + 1.0;
+    jlo = jlo > 0.0 ? jlo : 0.0;
+    jhi = jhi < q->ng ? jhi : q->ng;
+    if (!(jhi > jlo)) {
+        return acc;
+    }
+    j0 = (int)jlo;
+    j1 = (int)jhi;
+    for (j = j0; j < j1; ++j) {
+        const double g = q->gc + q->dg * ((double)j + 0.5);
+        z = (x - g) / sd;
+        if (z > -BLUR_Z && z < BLUR_Z) {
+            if (k < 1.0) { /* p_G(g) = ig g^(k-1) e^(-g/th): bounded for g >= gc */
+                acc += q->ig * pow(g, k - 1.0) * exp(-g / th) * q->dg * exp(-0.5 * z * z) * inorm;
+            } else { /* in logs: g^(k-1) and Gamma(k) overflow for large shapes */
+                acc += exp(q->lnorm + (k - 1.0) * log(g) - g / th - 0.5 * z * z) * q->dg * inorm;
             }
         }
     }
@@ -597,19 +656,42 @@ static double gamma_blur_pdf(double k, double th, double sd, double x, double gm
 int32_t hstpf__dist_blur(hstpf_dist_t *d, const hstpf_dist_spec_t *sp, double sd)
 {
     const double depth = sp->floor_depth > 0.0 ? sp->floor_depth : DEFAULT_FLOOR_DEPTH;
-    double lo, hi, dx, lpmax = -HUGE_VAL, gmax, var;
+    const double k = sp->shape, th = sp->scale;
+    double lo, hi, right, dx, lpmax = -HUGE_VAL, var, slope, sv, h;
+    blur_q_t q;
     uint32_t i;
-    if (!(sd > 0.0) || sp->kind != HSTPF_DIST_GAMMA) {
+    if (!finite_d(sd) || !spread_ok(sd, 0.0) || sp->kind != HSTPF_DIST_GAMMA || hstpf__dist_check(sp) != HSTPF_OK) {
         return HSTPF_E_DIST; /* a Gaussian stays Gaussian: the caller adds the variances */
     }
-    /* Gamma: grid from 6 sd left of the edge to the 1 - 1e-9 quantile (as
-     * the unblurred grid), the convolution integrated 10 sd beyond it */
+    /* Grid from 6 sd left of the edge to the Gamma's 1 - 1e-9 quantile hi
+     * (or 8 sd beyond its mean when the blur is that wide); the
+     * convolution integrated 10 sd beyond, but not beyond 50 scales past
+     * hi (1e-30 of the Gamma's mass there). A blur narrower than an eighth
+     * of the grid's spacing cannot show between two nodes: it is widened
+     * to hi / 4088. */
     hi = quantile(sp, 1.0, GAMMA_TOP_TAIL, 1) - sp->loc;
-    gmax = hi + 10.0 * sd;
-    lo = -6.0 * sd;
-    dx = (hi - lo) / (double)(HSTPF_DIST_LN - 1);
+    q.sd = hi / (8.0 * (double)(HSTPF_DIST_LN - 1));
+    q.sd = sd > q.sd ? sd : q.sd;
+    right = k * th + 8.0 * q.sd;
+    right = right > hi ? right : hi;
+    lo = -6.0 * q.sd;
+    dx = (right - lo) / (double)(HSTPF_DIST_LN - 1);
+    q.k = k;
+    q.th = th;
+    q.gmax = right + 10.0 * q.sd;
+    q.gmax = q.gmax < hi + 50.0 * th ? q.gmax : hi + 50.0 * th;
+    q.gc = k < 1.0 ? (q.sd < q.gmax ? q.sd : q.gmax) : 0.0;
+    /* a large shape's left tail 12 sd below its mean is below e^-72 */
+    q.glo = k > 144.0 ? (k - 12.0 * sqrt(k)) * th : 0.0;
+    sv = th * sqrt(k > 1.0 ? k : 1.0);
+    h = (q.sd < sv ? q.sd : sv) / BLUR_STEPS;
+    q.ng = ceil((q.gmax - q.gc) / h);
+    q.ng = q.ng < BLUR_MAX_STEPS ? q.ng : BLUR_MAX_STEPS;
+    q.dg = q.ng >= 1.0 ? (q.gmax - q.gc) / q.ng : 0.0;
+    q.ig = 1.0 / (exp(lgamma(k)) * pow(th, k)); /* used for k < 1 only: finite there */
+    q.lnorm = -lgamma(k) - k * log(th);
     for (i = 0; i < HSTPF_DIST_LN; ++i) {
-        const double p = gamma_blur_pdf(sp->shape, sp->scale, sd, lo + dx * (double)i, gmax);
+        const double p = gamma_blur_pdf(&q, lo + dx * (double)i);
         const double v = p > 0.0 ? log(p) : -HUGE_VAL;
         lpmax = v > lpmax ? v : lpmax;
         d->lp[i] = (hstpf_real_t)v;
@@ -624,13 +706,18 @@ int32_t hstpf__dist_blur(hstpf_dist_t *d, const hstpf_dist_spec_t *sp, double sd
     d->lo = (hstpf_real_t)(lo + sp->loc);
     d->dx = (hstpf_real_t)dx;
     d->inv_dx = (hstpf_real_t)(1.0 / dx);
-    /* left: the Gaussian's quadratic from the edge's slope; right: linear */
+    /* left: the Gaussian's quadratic from the edge's slope; right: linear,
+     * the Gamma's own slope, or the end slope when the grid was widened for
+     * a wide blur; neither rising away from the grid */
     d->hard[0] = d->hard[1] = 0u;
-    d->tail_b[0] = (hstpf_real_t)(-((double)d->lp[1] - (double)d->lp[0]) / dx);
-    d->tail_c[0] = (hstpf_real_t)(-0.5 / (sd * sd));
-    d->tail_b[1] = (hstpf_real_t)((sp->shape - 1.0) / hi - 1.0 / sp->scale); /* the Gamma's own */
+    slope = ((double)d->lp[1] - (double)d->lp[0]) / dx;
+    d->tail_b[0] = (hstpf_real_t)(-slope < 0.0 ? -slope : 0.0);
+    d->tail_c[0] = (hstpf_real_t)(-0.5 / (q.sd * q.sd));
+    slope = right > hi ? ((double)d->lp[HSTPF_DIST_LN - 1] - (double)d->lp[HSTPF_DIST_LN - 2]) / dx
+                       : (k - 1.0) / hi - 1.0 / th;
+    d->tail_b[1] = (hstpf_real_t)(slope < 0.0 ? slope : 0.0);
     d->tail_c[1] = 0;
-    var = sp->shape * sp->scale * sp->scale + sd * sd;
+    var = k * th * th + q.sd * q.sd;
     d->sd = (hstpf_real_t)sqrt(var);
     d->floor_slope = (hstpf_real_t)(1.0 / sqrt(var));
     d->dd_max = (hstpf_real_t)(1e4 * sqrt(var));

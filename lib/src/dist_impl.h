@@ -176,8 +176,12 @@ static inline hstpf_real_t hstpf__log_pos(hstpf_real_t x)
 }
 
 /* Replaces the log-density of a built Gamma distribution by that of the
- * variate plus N(0, sd), sd > 0; the sampling tables are kept. Init-time
- * cost: a few 10^5 exp and pow. HSTPF_E_DIST for any other kind. */
+ * variate plus N(0, sd), sd a spread (HSTPF_DIST_SPREAD_MIN..MAX); the
+ * sampling tables are kept. A blur below 1/4088 of the grid's span (the
+ * Gamma's 1 - 1e-9 quantile) is widened to it: it could not show between
+ * two nodes. Init-time cost bounded whatever scale / sd: per node at most
+ * 256 + 289 exp/pow (see docs/quality.md for the measured worst case).
+ * HSTPF_E_DIST for any other kind or an invalid spec. */
 int32_t hstpf__dist_blur(hstpf_dist_t *d, const hstpf_dist_spec_t *spec, double sd);
 
 /* Validates a specification without building it (used by hstpf_init). */

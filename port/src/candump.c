@@ -213,7 +213,12 @@ int hstpfd_candump_format(const hstpfd_frame_t *f, const char *iface, char *buf,
     }
     pos = (size_t)n;
     if (f->flags & HSTPFD_FRAME_RTR) {
-        n = snprintf(buf + pos, size - pos, "R\n");
+        /* candump -L writes a requested length 1..8 after the R */
+        if (f->len > 8u) {
+            return -1;
+        }
+        n = f->len > 0u ? snprintf(buf + pos, size - pos, "R%u\n", (unsigned)f->len)
+                        : snprintf(buf + pos, size - pos, "R\n");
     } else {
         if (f->flags & HSTPFD_FRAME_FD) {
             if (pos + 2 >= size) {
@@ -235,4 +240,96 @@ int hstpfd_candump_format(const hstpfd_frame_t *f, const char *iface, char *buf,
         return -1;
     }
     return (int)(pos + (size_t)n);
+}
+
+/* A guess at what a log that is not candump text is, for the message. */
+static const char *other_format(const char *head, size_t n, const char *line)
+{
+    if (n >= 4 && memcmp(head, "LOGG", 4) == 0) {
+        return "Vector BLF";
+    }
+    if (n >= 8 && memcmp(head, "MDF     ", 8) == 0) {
+        return "ASAM MF4";
+    }
+    if (memchr(head, '\0', n) != NULL) {
+        return "binary";
+    }
+    if (strncmp(line, "date ", 5) == 0 || strncmp(line, "base ", 5) == 0) {
+        return "Vector ASC";
+    }
+    if (n >= 13 && memcmp(head, ";$FILEVERSION", 13) == 0) {
+        return "PEAK TRC";
+    }
+    if (strncmp(line, "timestamp,", 10) == 0) {
+        return "python-can CSV";
+    }
+    return "unknown";
+}
+
+int hstpfd_candump_sniff(const char *head, size_t n, const char *name, char *msg, size_t msg_size)
+{
+    char line[256];
+    size_t i = 0;
+    unsigned data_lines = 0;
+    const char *what = NULL;
+    char first[sizeof line] = "";
+
+    if (memchr(head, '\0', n) != NULL) {
+        what = other_format(head, n, "");
+    }
+    while (what == NULL && i < n) {
+        const char *nl = memchr(head + i, '\n', n - i);
+        size_t k;
+        hstpfd_frame_t f;
+        int rc;
+        if (nl == NULL && n == HSTPFD_CANDUMP_SNIFF_BYTES) {
+            break; /* a line cut by the end of the head: not judged */
+        }
+        k = (nl != NULL ? (size_t)(nl - head) : n) - i;
+        if (k >= sizeof line) {
+            k = sizeof line - 1; /* too long for a candump line: judged BAD */
+        }
+        memcpy(line, head + i, k);
+        line[k] = '\0';
+        i = nl != NULL ? (size_t)(nl - head) + 1 : n;
+        rc = hstpfd_candump_parse(line, &f, NULL, 0);
+        if (rc == HSTPFD_CANDUMP_OK) {
+            return 0; /* one frame is enough: other lines are counted as bad later */
+        }
+        if (rc == HSTPFD_CANDUMP_BAD) {
+            if (data_lines++ == 0) {
+                memcpy(first, line, k + 1);
+            }
+        }
+    }
+    if (what == NULL) {
+        if (data_lines == 0) {
+            return 0; /* empty, comments only, or not decided within the head */
+        }
+        what = other_format(head, n, first);
+    }
+    if (msg != NULL && msg_size > 0) {
+        (void)snprintf(msg, msg_size,
+                       "%s is not a candump log (format: %s); convert it first: "
+                       "python -m can.logconvert %s out.log",
+                       name, what, name);
+    }
+    return -1;
+}
+
+int hstpfd_candump_check_file(const char *path, char *msg, size_t msg_size)
+{
+    char head[HSTPFD_CANDUMP_SNIFF_BYTES];
+    size_t n;
+    FILE *fp;
+    if (strcmp(path, "-") == 0) {
+        return 0; /* stdin cannot be read twice */
+    }
+    fp = fopen(path, "rb");
+    if (fp == NULL) {
+        return 0; /* the log source reports it with its reason */
+    }
+    n = fread(head, 1, sizeof head, fp);
+    (void)fclose(fp);
+    return hstpfd_candump_sniff(head, n, path, msg, msg_size);
 }

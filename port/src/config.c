@@ -1,5 +1,10 @@
 /* hstpfd: configuration keys, file parser and command-line overrides. */
 #include "config.h"
+#include "hstpf_frames.h" /* the DBC's E2E receiver parameters of the inputs: the defaults below */
+
+#if HSTPF_FRAME_POSITION_E2E_MAX_DELTA != HSTPF_FRAME_TRACTION_E2E_MAX_DELTA
+#error "e2e_max_delta is one key for both inputs: the DBC gives them different HstpfE2EMaxDeltaCounter"
+#endif
 
 #include <errno.h>
 #include <math.h>
@@ -113,6 +118,13 @@ const char *hstpfd_config_key_help(unsigned i)
     return i < N_KEYS ? keys[i].help : NULL;
 }
 
+/* The format is checked at every caller (and clang's -Wformat-nonliteral is
+ * satisfied by the attribute). */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static void fail(char *err, size_t size, const char *fmt, ...);
+
 static void fail(char *err, size_t size, const char *fmt, ...)
 {
     va_list ap;
@@ -186,13 +198,13 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->gate_m = fc.gate_m;
     c->mass_t = 500.0;
     c->sched.step_period_s = 1.0;
-    c->sched.pos_timeout_s = 0.5;
-    c->sched.trac_timeout_s = 0.5;
+    c->sched.pos_timeout_s = HSTPF_FRAME_POSITION_E2E_TIMEOUT_MS / 1000.0;
+    c->sched.trac_timeout_s = HSTPF_FRAME_TRACTION_E2E_TIMEOUT_MS / 1000.0;
     c->sched.predict_period_s = 1.0;
     c->sched.max_gap_s = 600.0;
     c->sched.traction_mode = HSTPFD_TRACTION_MEAN;
     c->sched.stale_policy = HSTPFD_STALE_PREDICT;
-    c->e2e_max_delta = 3;
+    c->e2e_max_delta = HSTPF_FRAME_POSITION_E2E_MAX_DELTA;
     c->rx_filter = HSTPFD_RX_FILTER_BLOCK;
     c->time_scale = 1.0;
     c->tick_s = 0.1;
@@ -212,6 +224,18 @@ static char *trim(char *s)
         *--e = '\0';
     }
     return s;
+}
+
+/* Control characters (but tab) cannot be written back as one config line. */
+static int printable(const char *s)
+{
+    for (; *s != '\0'; ++s) {
+        const unsigned char ch = (unsigned char)*s;
+        if ((ch < 0x20u && ch != '\t') || ch == 0x7fu) {
+            return 0;
+        }
+    }
+    return 1;
 }
 
 /* A finite number filling all of text. */
@@ -324,8 +348,9 @@ static int add_model(hstpfd_config_t *c, const char *name, double c0, double c1,
         fail(err, err_size, "models: more than %d", HSTPF_MAX_MODELS);
         return -1;
     }
-    if (strlen(name) >= HSTPFD_NAME_MAX || name[0] == '\0') {
-        fail(err, err_size, "models: name '%s' empty or longer than %d", name, HSTPFD_NAME_MAX - 1);
+    if (strlen(name) >= HSTPFD_NAME_MAX || name[0] == '\0' || !printable(name)) {
+        fail(err, err_size, "models: name '%s' empty, longer than %d or with control characters", name,
+             HSTPFD_NAME_MAX - 1);
         return -1;
     }
     for (i = 0; i < c->n_models; ++i) {
@@ -460,6 +485,10 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
             fail(err, err_size, "%s: longer than %u characters", key, (unsigned)(cap - 1));
             return -1;
         }
+        if (!printable(v)) {
+            fail(err, err_size, "%s: control characters are not allowed", key);
+            return -1;
+        }
         (void)snprintf(base + k->off, cap, "%s", v);
         return 0;
     }
@@ -577,9 +606,40 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
     return -1;
 }
 
+/* A value in double quotes (as hstpfd_config_write puts values holding '#',
+ * ';' or '"'): \" and \\ inside; blanks and a comment may follow. The
+ * unquoted text replaces the quoted one in place. Returns 0 or -1. */
+static int unquote(char *v, char *err, size_t err_size)
+{
+    char *r = v + 1, *w = v;
+    for (;;) {
+        if (*r == '\0') {
+            fail(err, err_size, "value without its closing '\"'");
+            return -1;
+        }
+        if (*r == '"') {
+            break;
+        }
+        if (*r == '\\' && (r[1] == '"' || r[1] == '\\')) {
+            ++r;
+        }
+        *w++ = *r++;
+    }
+    ++r;
+    while (*r == ' ' || *r == '\t' || *r == '\r' || *r == '\n') {
+        ++r;
+    }
+    if (*r != '\0' && *r != '#' && *r != ';') {
+        fail(err, err_size, "text after the closing '\"'");
+        return -1;
+    }
+    *w = '\0';
+    return 0;
+}
+
 int hstpfd_config_line(hstpfd_config_t *c, const char *line, char *err, size_t err_size)
 {
-    char buf[2304];
+    char buf[HSTPFD_LINE_MAX];
     char *p, *eq;
     const char *key;
     size_t n = strlen(line);
@@ -613,6 +673,15 @@ int hstpfd_config_line(hstpfd_config_t *c, const char *line, char *err, size_t e
     /* an inline comment needs a blank before it: "x = 1  # note" */
     {
         char *v = eq + 1, *h;
+        while (*v == ' ' || *v == '\t') {
+            ++v;
+        }
+        if (*v == '"') {
+            if (unquote(v, err, err_size) != 0) {
+                return -1;
+            }
+            return hstpfd_config_set(c, key, v, err, err_size);
+        }
         for (h = v; *h != '\0'; ++h) {
             if ((*h == '#' || *h == ';') && h > v && (h[-1] == ' ' || h[-1] == '\t')) {
                 *h = '\0';
@@ -626,7 +695,7 @@ int hstpfd_config_line(hstpfd_config_t *c, const char *line, char *err, size_t e
 int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t err_size)
 {
     FILE *fp = fopen(path, "r");
-    char line[2304];
+    char line[HSTPFD_LINE_MAX];
     char e[HSTPFD_ERR_MAX];
     unsigned lineno = 0;
     if (fp == NULL) {
@@ -652,6 +721,30 @@ int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t e
         return -1;
     }
     (void)fclose(fp);
+    return 0;
+}
+
+int hstpfd_config_text(hstpfd_config_t *c, const char *text, char *err, size_t err_size)
+{
+    char line[HSTPFD_LINE_MAX];
+    char e[HSTPFD_ERR_MAX];
+    unsigned lineno = 0;
+    while (*text != '\0') {
+        const char *nl = strchr(text, '\n');
+        const size_t n = nl != NULL ? (size_t)(nl - text) : strlen(text);
+        ++lineno;
+        if (n >= sizeof line) {
+            fail(err, err_size, "line %u: line too long", lineno);
+            return -1;
+        }
+        memcpy(line, text, n);
+        line[n] = '\0';
+        if (hstpfd_config_line(c, line, e, sizeof e) != 0) {
+            fail(err, err_size, "line %u: %s", lineno, e);
+            return -1;
+        }
+        text += n + (nl != NULL ? 1u : 0u);
+    }
     return 0;
 }
 
@@ -725,12 +818,44 @@ static int noise_text(const hstpf_dist_spec_t *d, char *buf, size_t size)
     return snprintf(buf, size, "gaussian:%s:%s", g17(d->mean, a, sizeof a), g17(d->sd, b, sizeof b));
 }
 
+/* v as it must stand after "key = " to read back as v: in double quotes,
+ * with \" and \\, when it holds '#', ';' or '"' (a comment or a quote to
+ * hstpfd_config_line). Returns 0, or -1 if it does not fit. */
+static int quoted(const char *v, char *out, size_t size)
+{
+    size_t w = 0;
+    if (strpbrk(v, "#;\"") == NULL) {
+        if (strlen(v) >= size) {
+            return -1;
+        }
+        memcpy(out, v, strlen(v) + 1);
+        return 0;
+    }
+    if (size < 3) {
+        return -1;
+    }
+    out[w++] = '"';
+    for (; *v != '\0'; ++v) {
+        if (w + 4 > size) {
+            return -1;
+        }
+        if (*v == '"' || *v == '\\') {
+            out[w++] = '\\';
+        }
+        out[w++] = *v;
+    }
+    out[w++] = '"';
+    out[w] = '\0';
+    return 0;
+}
+
 int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
 {
     size_t pos = 0;
     unsigned i;
     int n;
-    char tmp[2048];
+    char tmp[HSTPFD_LINE_MAX];
+    char raw[HSTPFD_LINE_MAX / 2];
 #define PUT(...)                                                                                             \
     do {                                                                                                     \
         n = snprintf(buf + pos, size - pos, __VA_ARGS__);                                                    \
@@ -745,7 +870,10 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
         switch (k->type) {
         case K_NAME:
         case K_PATH:
-            PUT("%s = %s\n", k->name, base + k->off);
+            if (quoted(base + k->off, tmp, sizeof tmp) != 0) {
+                return -1;
+            }
+            PUT("%s = %s\n", k->name, tmp);
             break;
         case K_U16: {
             uint16_t w;
@@ -776,20 +904,29 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
             break;
         case K_MODELS: {
             uint16_t m;
-            PUT("%s = ", k->name);
+            size_t r = 0;
+            raw[0] = '\0';
             for (m = 0; m < c->n_models; ++m) {
                 const hstpf_theta_t *t = &c->models[m];
                 const int32_t row = hstpf_train_type_find(c->model_name[m]);
+                int q;
                 if (row >= 0 && hstpf_train_types[row].c0 == t->c0 && hstpf_train_types[row].c1 == t->c1 &&
                     hstpf_train_types[row].c2 == t->c2) {
-                    PUT("%s%s", m ? ", " : "", c->model_name[m]);
+                    q = snprintf(raw + r, sizeof raw - r, "%s%s", m ? ", " : "", c->model_name[m]);
                 } else {
                     char a[32], b[32], d[32];
-                    PUT("%s%s:%s:%s:%s", m ? ", " : "", c->model_name[m], g17(t->c0, a, sizeof a),
-                        g17(t->c1, b, sizeof b), g17(t->c2, d, sizeof d));
+                    q = snprintf(raw + r, sizeof raw - r, "%s%s:%s:%s:%s", m ? ", " : "", c->model_name[m],
+                                 g17(t->c0, a, sizeof a), g17(t->c1, b, sizeof b), g17(t->c2, d, sizeof d));
                 }
+                if (q < 0 || (size_t)q >= sizeof raw - r) {
+                    return -1;
+                }
+                r += (size_t)q;
             }
-            PUT("\n");
+            if (quoted(raw, tmp, sizeof tmp) != 0) {
+                return -1;
+            }
+            PUT("%s = %s\n", k->name, tmp);
             break;
         }
         case K_NOISE:

@@ -1,5 +1,6 @@
 /* hstpfd: configuration. A file of "key = value" lines (# or ; starts a
- * comment, [section] lines are allowed and ignored) and command-line
+ * comment, [section] lines are allowed and ignored; a value may be given in
+ * double quotes, with \" and \\ inside, to hold '#' or ';') and command-line
  * overrides "--key value" or "--set key=value"; later settings win.
  * Every key, its default and its range: docs/daemon.md. Portable C99
  * (stdio for the file), no heap. */
@@ -15,6 +16,9 @@
 #define HSTPFD_NAME_MAX 32
 #define HSTPFD_PATH_MAX 512
 #define HSTPFD_ERR_MAX 256
+/* Longest config line: the longest model list, quoted (17 x 31-character
+ * names with every character escaped and three 24-character numbers). */
+#define HSTPFD_LINE_MAX 4096
 
 typedef enum { HSTPFD_OUT_JSONL = 0, HSTPFD_OUT_CSV = 1 } hstpfd_out_format_t;
 typedef enum {
@@ -72,6 +76,10 @@ int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t e
  * Returns 0 (also for blank, comment and section lines) or -1. */
 int hstpfd_config_line(hstpfd_config_t *c, const char *line, char *err, size_t err_size);
 
+/* Applies the lines of text (e.g. hstpfd_config_write's output) in order.
+ * Returns 0, or -1 with "line N: ..." in err. */
+int hstpfd_config_text(hstpfd_config_t *c, const char *text, char *err, size_t err_size);
+
 /* Cross-checks (a source given, ...) and fills the derived fields.
  * Returns 0 or -1 with a message. */
 int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size);
@@ -84,7 +92,10 @@ unsigned hstpfd_config_n_keys(void);
 const char *hstpfd_config_key_name(unsigned i);
 const char *hstpfd_config_key_help(unsigned i);
 
-/* Writes the effective configuration as a config file. */
+/* Writes the effective configuration as a config file (what --print-config
+ * prints): values holding '#', ';' or '"' in double quotes with \" and \\,
+ * so that hstpfd_config_text() reads back the same configuration.
+ * Returns the length, or -1 if it does not fit in size. */
 int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size);
 
 /* "gaussian:mean:sd" / "gamma:shape:scale:loc" into spec; 0 or -1. */

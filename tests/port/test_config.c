@@ -256,13 +256,188 @@ static void test_example_files(void **state)
     assert_int_equal(cfg.out_format, HSTPFD_OUT_CSV);
 }
 
+/* --print-config output read back gives the same configuration and the same
+ * text again, also for values a config line would otherwise take for a
+ * comment ('#', ';' after a blank) or a quote. */
+static void roundtrip(const hstpfd_config_t *c)
+{
+    static char a[16384], b[16384];
+    assert_true(hstpfd_config_write(c, a, sizeof a) > 0);
+    hstpfd_config_default(&cfg2);
+    if (hstpfd_config_text(&cfg2, a, err, sizeof err) != 0) {
+        fail_msg("%s in\n%s", err, a);
+    }
+    assert_true(hstpfd_config_write(&cfg2, b, sizeof b) > 0);
+    assert_string_equal(a, b);
+}
+
+static void test_write_quoting(void **state)
+{
+    char name[64];
+    int i;
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "#run.log", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "out", ";x", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "summary", "a #b ;c", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "frames_out", "\"q\\\" x", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "iface", "#0", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "#m:1:0.01:0.0001, CRH3", err, sizeof err), 0);
+    roundtrip(&cfg);
+    assert_string_equal(cfg2.log, "#run.log");
+    assert_string_equal(cfg2.out, ";x");
+    assert_string_equal(cfg2.summary, "a #b ;c");
+    assert_string_equal(cfg2.frames_out, "\"q\\\" x");
+    assert_string_equal(cfg2.iface, "#0");
+    assert_string_equal(cfg2.models[0].name, "#m");
+
+    /* the quoted form by hand, with a comment after it */
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"#a \\\"b\\\\\"  # note", err, sizeof err), 0);
+    assert_string_equal(cfg.log, "#a \"b\\");
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"open", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_line(&cfg, "log = \"a\" b", err, sizeof err), -1);
+    /* a newline or other control character cannot be written back: refused */
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "a\nb", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "a\x01:1:0:0", err, sizeof err), -1);
+
+    /* the longest model list: 17 custom rows with long names and long numbers */
+    hstpfd_config_default(&cfg);
+    {
+        char list[2048];
+        size_t pos = 0;
+        for (i = 0; i < HSTPF_MAX_MODELS; ++i) {
+            (void)snprintf(name, sizeof name, "#%02d%s", i, "_aaaaaaaaaaaaaaaaaaaaaaaaaaa");
+            pos += (size_t)snprintf(list + pos, sizeof list - pos, "%s%s:1.2345678901234567:0.12345678901234567:"
+                                    "0.0012345678901234567", i ? "," : "", name);
+        }
+        assert_true(pos < sizeof list);
+        if (hstpfd_config_set(&cfg, "models", list, err, sizeof err) != 0) {
+            fail_msg("%s", err);
+        }
+    }
+    assert_int_equal(cfg.n_models, HSTPF_MAX_MODELS);
+    roundtrip(&cfg);
+    assert_int_equal(cfg2.n_models, HSTPF_MAX_MODELS);
+    assert_float_equal(cfg2.models[16].c2, cfg.models[16].c2, 0.0);
+}
+
+/* Every buffer too short for the printed configuration is refused, never
+ * overrun; parse errors of each kind name the key; rarely used values. */
+static void test_write_sizes_and_errors(void **state)
+{
+    static char full[16384], part[16384];
+    int n, k;
+    char longv[3000];
+    (void)state;
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "CRH3, x:1:0.01:0.0001", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "#a", err, sizeof err), 0);
+    n = hstpfd_config_write(&cfg, full, sizeof full);
+    assert_true(n > 0);
+    for (k = 0; k <= n; ++k) {
+        memset(part, 'Z', sizeof part);
+        assert_int_equal(hstpfd_config_write(&cfg, part, (size_t)k), -1);
+        assert_true(part[k] == 'Z'); /* nothing beyond the buffer */
+    }
+    assert_int_equal(hstpfd_config_write(&cfg, part, (size_t)n + 1u), n);
+    assert_null(hstpfd_config_key_name(hstpfd_config_n_keys()));
+    assert_null(hstpfd_config_key_help(hstpfd_config_n_keys()));
+    /* no room for a message: still refused */
+    assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", NULL, 0), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", err, 0), -1);
+
+    /* enums and booleans, each spelling */
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "particle", err, sizeof err), 0);
+    assert_int_equal(cfg.engine, HSTPF_ENGINE_PARTICLE);
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "kalman", err, sizeof err), 0);
+    assert_int_equal(cfg.engine, HSTPF_ENGINE_KALMAN);
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "auto", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "grid", err, sizeof err), -1);
+    {
+        static const char *const yes[] = {"1", "yes", "true", "on"}, *const no[] = {"0", "no", "false", "off"};
+        for (k = 0; k < 4; ++k) {
+            assert_int_equal(hstpfd_config_set(&cfg, "send", no[k], err, sizeof err), 0);
+            assert_int_equal(cfg.send, 0);
+            assert_int_equal(hstpfd_config_set(&cfg, "send", yes[k], err, sizeof err), 0);
+            assert_int_equal(cfg.send, 1);
+        }
+    }
+    /* noise: each malformed form */
+    {
+        static const char *const bad[] = {"gaussian:1",   "gaussian:x:1",    "gaussian:0:0",    "gaussian:0:1:2",
+                                          "gamma:1",      "gamma:0.5:0.2:x", "gamma:0:1",       "gamma:0.5:-1",
+                                          "gamma:2e4:1",  "uniform:1:2",     "gaussian:1:2:3:4:5:6",
+                                          "gamma:x:1:0",  "gamma:0.5:y"};
+        for (k = 0; k < (int)(sizeof bad / sizeof bad[0]); ++k) {
+            if (hstpfd_config_set(&cfg, "noise_e", bad[k], err, sizeof err) != -1) {
+                fail_msg("noise '%s' accepted", bad[k]);
+            }
+            assert_non_null(strstr(err, "noise"));
+        }
+        assert_int_equal(hstpfd_config_set(&cfg, "noise_v", "gamma:0.1:0.05", err, sizeof err), 0); /* loc 0 */
+        assert_int_equal(hstpfd_config_set(&cfg, "noise", "case3", err, sizeof err), -1);
+    }
+    memset(longv, 'a', sizeof longv);
+    longv[200] = '\0';
+    assert_int_equal(hstpfd_config_set(&cfg, "noise_e", longv, err, sizeof err), -1); /* too long */
+    /* models: each malformed form */
+    {
+        static const char *const bad[] = {"a:1:2", "a:100:0:0", "a:1:2:0", "a:1:0:1", "", " , ", "a:x:0:0",
+                                          "a:1:0:0, a:1:0:0", "NoSuchTrain", ":1:0:0"};
+        for (k = 0; k < (int)(sizeof bad / sizeof bad[0]); ++k) {
+            if (hstpfd_config_set(&cfg, "models", bad[k], err, sizeof err) != -1) {
+                fail_msg("models '%s' accepted", bad[k]);
+            }
+        }
+        longv[200] = 'a';
+        longv[2100] = '\0';
+        assert_int_equal(hstpfd_config_set(&cfg, "models", longv, err, sizeof err), -1);
+        for (k = 0; k < 130; k += 2) { /* 65 entries */
+            longv[k] = 'a';
+            longv[k + 1] = ',';
+        }
+        longv[130] = '\0';
+        assert_int_equal(hstpfd_config_set(&cfg, "models", longv, err, sizeof err), -1);
+        assert_int_equal(hstpfd_config_set(&cfg, "models", "all, CRH3", err, sizeof err), -1); /* 18 */
+    }
+    /* a value longer than any key takes */
+    memset(longv, 'b', sizeof longv);
+    longv[sizeof longv - 1] = '\0';
+    assert_int_equal(hstpfd_config_set(&cfg, "out", longv, err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_line(&cfg, longv, err, sizeof err), 0 - 1);
+    /* quoted values with blanks, tabs and comments after them */
+    assert_int_equal(hstpfd_config_line(&cfg, "out = \"a b\"\t; c", err, sizeof err), 0);
+    assert_string_equal(cfg.out, "a b");
+    assert_int_equal(hstpfd_config_line(&cfg, "out = \"a\\\\b\\\\\"\r\n", err, sizeof err), 0);
+    assert_string_equal(cfg.out, "a\\b\\");
+    assert_int_equal(hstpfd_config_line(&cfg, "out = \"\\q\"", err, sizeof err), 0); /* other escapes: as is */
+    assert_string_equal(cfg.out, "\\q");
+    /* text: a line too long, and the error names the line */
+    assert_int_equal(hstpfd_config_text(&cfg, "particles = 10\nparticles = x\n", err, sizeof err), -1);
+    assert_non_null(strstr(err, "line 2"));
+    {
+        static char big[HSTPFD_LINE_MAX + 10];
+        memset(big, 'c', sizeof big - 1);
+        big[sizeof big - 1] = '\0';
+        assert_int_equal(hstpfd_config_text(&cfg, big, err, sizeof err), -1);
+        assert_non_null(strstr(err, "too long"));
+    }
+    /* the estimator's own ranges, through finish: noise beyond float range */
+    hstpfd_config_default(&cfg);
+    assert_int_equal(hstpfd_config_set(&cfg, "log", "x.log", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "noise_e", "gaussian:1e30:1", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1);
+    assert_non_null(strstr(err, "estimator rejects"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),   cmocka_unit_test(test_set_numbers), cmocka_unit_test(test_enums),
         cmocka_unit_test(test_noise),      cmocka_unit_test(test_models),      cmocka_unit_test(test_lines),
         cmocka_unit_test(test_file_and_write), cmocka_unit_test(test_finish),
-        cmocka_unit_test(test_example_files),
+        cmocka_unit_test(test_example_files), cmocka_unit_test(test_write_quoting),
+        cmocka_unit_test(test_write_sizes_and_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,8 +12,10 @@
  *    table's stated accuracy), for three seeds;
  *  - log-density inside the grid: dx^2/8 * max|(log p)''| per cell (dist.h)
  *    plus float round-off computed from the magnitudes involved. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "dist_impl.h"
 #include "testutil.h"
@@ -870,6 +872,221 @@ static void test_init_errors(void **state)
     TU_CLOSE(d.sd, 1.0, 1e-6);
 }
 
+/* ---- ranges and bounded work (issue 11) -------------------------------- */
+
+/* Every member of a built distribution is a finite number. */
+static void assert_all_finite(const hstpf_dist_t *d, const char *what)
+{
+    unsigned i;
+    const hstpf_real_t one[] = {d->lo, d->dx, d->inv_dx, d->tail_b[0], d->tail_b[1], d->tail_c[0],
+                                d->tail_c[1], d->floor, d->floor_slope, d->dd_max, d->lp_max, d->mean, d->sd};
+    for (i = 0; i < sizeof one / sizeof one[0]; ++i) {
+        if (!isfinite((double)one[i])) {
+            fail_msg("%s: member %u is %g", what, i, (double)one[i]);
+        }
+    }
+    for (i = 0; i <= HSTPF_DIST_QN; ++i) {
+        if (!isfinite((double)d->q[i])) {
+            fail_msg("%s: q[%u] = %g", what, i, (double)d->q[i]);
+        }
+    }
+    for (i = 0; i < HSTPF_DIST_TAILN; ++i) {
+        if (!isfinite((double)d->tail_lo[i]) || !isfinite((double)d->tail_hi[i])) {
+            fail_msg("%s: tail %u not finite", what, i);
+        }
+    }
+    for (i = 0; i < LN; ++i) {
+        if (!isfinite((double)d->lp[i])) {
+            fail_msg("%s: lp[%u] = %g", what, i, (double)d->lp[i]);
+        }
+    }
+    {
+        static const double xs[] = {0.0, 1.0, -1.0, 1e9, -1e9, 1e30, -1e30, 3e38, -3e38};
+        static const uint32_t rs[] = {0u, 1u, 0x7FFFFFFFu, 0x80000000u, 0xFFFFFFFEu, 0xFFFFFFFFu};
+        for (i = 0; i < sizeof xs / sizeof xs[0]; ++i) {
+            const double v = (double)hstpf_dist_logpdf(d, (hstpf_real_t)xs[i]);
+            if (!isfinite(v)) {
+                fail_msg("%s: logpdf(%g) = %g", what, xs[i], v);
+            }
+        }
+        for (i = 0; i < sizeof rs / sizeof rs[0]; ++i) {
+            const double v = (double)hstpf_dist_sample(d, rs[i]);
+            if (!isfinite(v)) {
+                fail_msg("%s: sample(%u) = %g", what, (unsigned)rs[i], v);
+            }
+        }
+    }
+}
+
+/* Offsets, spreads and floors outside the documented ranges are refused;
+ * the extremes inside them build tables of finite numbers only. */
+static void test_spec_ranges(void **state)
+{
+    static hstpf_dist_t d;
+    hstpf_dist_spec_t s;
+    double x2[2] = {0.0, 1.0}, p2[2] = {1.0, 1.0};
+    const double X = HSTPF_DIST_X_MAX, SMIN = HSTPF_DIST_SPREAD_MIN, SMAX = HSTPF_DIST_SPREAD_MAX;
+    const double R = HSTPF_DIST_REL_MIN;
+    (void)state;
+    /* refused: beyond float range, or below what float tables resolve */
+    gauss_spec(&s, 1e38, 1.0), expect_init(&s, HSTPF_E_DIST, "gaussian mean 1e38");
+    gauss_spec(&s, 2.0 * X, 1e5), expect_init(&s, HSTPF_E_DIST, "gaussian mean 2e9");
+    gauss_spec(&s, 0.0, 3.5e38), expect_init(&s, HSTPF_E_DIST, "gaussian sd 3.5e38");
+    gauss_spec(&s, 0.0, 2.0 * SMAX), expect_init(&s, HSTPF_E_DIST, "gaussian sd 2e9");
+    gauss_spec(&s, 0.0, 1e-30), expect_init(&s, HSTPF_E_DIST, "gaussian sd 1e-30");
+    gauss_spec(&s, 0.0, 0.5 * SMIN), expect_init(&s, HSTPF_E_DIST, "gaussian sd below min");
+    gauss_spec(&s, 1e3, 0.5 * R * 1e3), expect_init(&s, HSTPF_E_DIST, "gaussian sd below rel min");
+    gamma_spec(&s, 1.0, 3.5e38, 0.0), expect_init(&s, HSTPF_E_DIST, "gamma scale 3.5e38");
+    gamma_spec(&s, 1.0, 1e-30, 0.0), expect_init(&s, HSTPF_E_DIST, "gamma scale 1e-30");
+    gamma_spec(&s, 1.0, 1.0, -2.0 * X), expect_init(&s, HSTPF_E_DIST, "gamma loc -2e9");
+    gamma_spec(&s, 1.0, 0.5 * R * 1e6, 1e6), expect_init(&s, HSTPF_E_DIST, "gamma scale below rel min");
+    gauss_spec(&s, 0.0, 1.0), s.floor_depth = HSTPF_DIST_FLOOR_MAX * 1.01,
+                              expect_init(&s, HSTPF_E_DIST, "floor_depth beyond max");
+    gamma_spec(&s, 1.0, 1.0, 0.0), s.edge_soft = 1e-30, expect_init(&s, HSTPF_E_DIST, "edge_soft 1e-30");
+    gamma_spec(&s, 1.0, 1.0, 0.0), s.edge_soft = 1e30, expect_init(&s, HSTPF_E_DIST, "edge_soft 1e30");
+    memset(&s, 0, sizeof s);
+    s.kind = HSTPF_DIST_TABLE;
+    s.table_x = x2;
+    s.table_p = p2;
+    s.table_n = 2;
+    x2[1] = 1e-12, expect_init(&s, HSTPF_E_DIST, "table support 1e-12");
+    x2[0] = 1e8, x2[1] = 1e8 + 1.0, expect_init(&s, HSTPF_E_DIST, "table support 1 m at 1e8 m");
+    x2[0] = -1e38, x2[1] = 1e38, expect_init(&s, HSTPF_E_DIST, "table points 1e38");
+    x2[0] = 0.0, x2[1] = 1e9, p2[0] = p2[1] = 1e300, expect_init(&s, HSTPF_E_DIST, "table mass infinite");
+
+    /* accepted: the extremes, every member finite */
+    p2[0] = p2[1] = 1.0;
+    x2[0] = 0.0, x2[1] = SMIN, expect_init(&s, HSTPF_OK, "table support min");
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK), assert_all_finite(&d, "table support min");
+    x2[0] = -X, x2[1] = -X + SMAX, expect_init(&s, HSTPF_OK, "table widest at -X");
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK), assert_all_finite(&d, "table widest at -X");
+    x2[0] = -X, x2[1] = X, expect_init(&s, HSTPF_E_DIST, "table wider than the widest spread");
+    x2[0] = X - R * X, x2[1] = X, p2[0] = 1e300, p2[1] = 0.0;
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK), assert_all_finite(&d, "table narrow at X");
+    {
+        static const double gm[][2] = {{0.0, 1e-9}, {0.0, 1e9}, {1e9, 1e9}, {-1e9, 1e4}, {1e4, 0.1}};
+        static const double ga[][3] = {{1e-3, 1e-9, 0.0}, {1e4, 1e-9, 0.0}, {1e-3, 1e9, -1e9},
+                                       {1e4, 1e9, 1e9},   {1.0, 1e4, -1e9}, {0.5, 1e-4, 10.0}};
+        unsigned i;
+        char what[96];
+        for (i = 0; i < sizeof gm / sizeof gm[0]; ++i) {
+            gauss_spec(&s, gm[i][0], gm[i][1]);
+            s.floor_depth = HSTPF_DIST_FLOOR_MAX;
+            (void)snprintf(what, sizeof what, "N(%g, %g)", gm[i][0], gm[i][1]);
+            expect_init(&s, HSTPF_OK, what);
+            assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+            assert_all_finite(&d, what);
+        }
+        for (i = 0; i < sizeof ga / sizeof ga[0]; ++i) {
+            gamma_spec(&s, ga[i][0], ga[i][1], ga[i][2]);
+            s.edge_soft = SMIN;
+            (void)snprintf(what, sizeof what, "Gamma(%g, %g, %g)", ga[i][0], ga[i][1], ga[i][2]);
+            expect_init(&s, HSTPF_OK, what);
+            assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+            assert_all_finite(&d, what);
+        }
+    }
+}
+
+/* The Gamma's quantiles for scales below 1: the bisection's bracket is in
+ * scales (it was in scale^2 and collapsed for small scales). Gamma(2):
+ * P(2, x) = 1 - e^-x (1 + x), median 1.678346990 (solved by hand below);
+ * Gamma(1e4): median k - 1/3 + 8 / (405 k). */
+static void test_gamma_small_scale(void **state)
+{
+    static hstpf_dist_t d;
+    hstpf_dist_spec_t s;
+    double a = 0.0, b = 10.0;
+    int i;
+    (void)state;
+    for (i = 0; i < 200; ++i) {
+        const double m = 0.5 * (a + b);
+        if (1.0 - exp(-m) * (1.0 + m) < 0.5) {
+            a = m;
+        } else {
+            b = m;
+        }
+    }
+    gamma_spec(&s, 2.0, 1e-3, 0.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    TU_CLOSE(d.q[HSTPF_DIST_QN / 2], 1e-3 * a, 1e-3 * a * 1e-5);
+    gamma_spec(&s, 1e4, 1e-3, 5.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    TU_CLOSE(d.q[HSTPF_DIST_QN / 2], 5.0 + 1e-3 * (1e4 - 1.0 / 3.0 + 8.0 / 4.05e6), 1e-5);
+}
+
+/* The blur's quadrature: bounded time and finite tables whatever scale /
+ * sd (once unbounded: 15 s at 1e4 / 0.01, a float-to-int overflow beyond
+ * 1e8; all -inf for shape 1e4), and right where an exact value is known. */
+static void test_blur_bounded(void **state)
+{
+    static hstpf_dist_t d;
+    static const double shapes[] = {1e-3, 0.5, 1.0, 2.0, 143.0, 1e4};
+    static const double scale_sd[][2] = {{1e9, 1e-9}, {1e-9, 1e9}, {1.0, 1.0}, {1e3, 1e-6}, {1e-3, 1e3}, {1.0, 1e-9}};
+    hstpf_dist_spec_t s;
+    double worst = 0.0;
+    unsigned i, j;
+    char what[96];
+    (void)state;
+    for (i = 0; i < sizeof shapes / sizeof shapes[0]; ++i) {
+        for (j = 0; j < sizeof scale_sd / sizeof scale_sd[0]; ++j) {
+            clock_t t0;
+            double cpu;
+            gamma_spec(&s, shapes[i], scale_sd[j][0], 0.0);
+            (void)snprintf(what, sizeof what, "Gamma(%g, %g) + N(0, %g)", shapes[i], scale_sd[j][0], scale_sd[j][1]);
+            assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+            t0 = clock();
+            assert_int_equal(hstpf__dist_blur(&d, &s, scale_sd[j][1]), HSTPF_OK);
+            cpu = (double)(clock() - t0) / CLOCKS_PER_SEC;
+            worst = cpu > worst ? cpu : worst;
+            if (cpu > 2.0) { /* measured below 0.02 s (docs/quality.md) */
+                fail_msg("%s: %.2f s", what, cpu);
+            }
+            assert_all_finite(&d, what);
+        }
+    }
+    print_message("blur: slowest of %u cases %.3f s CPU\n",
+                  (unsigned)(sizeof shapes / sizeof shapes[0] * sizeof scale_sd / sizeof scale_sd[0]), worst);
+    /* a blur far below the grid: the Gamma's own density, log p = log(x) - x/th - 2 log th */
+    gamma_spec(&s, 2.0, 1e3, 0.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 1e-6), HSTPF_OK);
+    TU_CLOSE(hstpf_dist_logpdf(&d, 2000.0f), log(2000.0) - 2.0 - 2.0 * log(1e3), 1e-2);
+    TU_CLOSE(hstpf_dist_logpdf(&d, 500.0f), log(500.0) - 0.5 - 2.0 * log(1e3), 1e-2);
+    {
+        double mass = 0.0, x;
+        for (x = 0.5; x < 60000.0; x += 1.0) {
+            mass += exp((double)hstpf_dist_logpdf(&d, (hstpf_real_t)x));
+        }
+        TU_CLOSE(mass, 1.0, 2e-3);
+    }
+    /* shape 1e4: the Gamma's exact density at its mean (blur var 1 of 1e4) */
+    gamma_spec(&s, 1e4, 1.0, 0.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 1.0), HSTPF_OK);
+    TU_CLOSE(hstpf_dist_logpdf(&d, 10000.0f), 9999.0 * log(1e4) - 1e4 - lgamma(1e4), 1e-2);
+    /* a blur far wider than the Gamma: N(0, sd) */
+    gamma_spec(&s, 1e4, 1e-9, 0.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 1e9), HSTPF_OK);
+    TU_CLOSE(hstpf_dist_logpdf(&d, 0.0f), -log(1e9 * sqrt(2.0 * 3.14159265358979)), 1e-3);
+    TU_CLOSE(hstpf_dist_logpdf(&d, 1e9f), -log(1e9 * sqrt(2.0 * 3.14159265358979)) - 0.5, 1e-3);
+    /* refused: blurs outside the spreads' range, and NaN */
+    gamma_spec(&s, 0.5, 0.2, 0.0);
+    assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 3.5e38), HSTPF_E_DIST);
+    assert_int_equal(hstpf__dist_blur(&d, &s, 1e-30), HSTPF_E_DIST);
+    assert_int_equal(hstpf__dist_blur(&d, &s, NAN), HSTPF_E_DIST);
+    assert_int_equal(hstpf__dist_blur(&d, &s, INFINITY), HSTPF_E_DIST);
+    s.scale = -1.0; /* an invalid Gamma is refused by the blur as by init */
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.1), HSTPF_E_DIST);
+    /* its own floor depth */
+    s.scale = 0.2;
+    s.floor_depth = 12.0;
+    assert_int_equal(hstpf__dist_blur(&d, &s, 0.1), HSTPF_OK);
+    TU_CLOSE(d.floor, (double)d.lp_max - 12.0, 1e-4);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -957,6 +1174,9 @@ int main(void)
         cmocka_unit_test(test_exp_neg),
         cmocka_unit_test(test_exp_neg_edges),
         cmocka_unit_test(test_init_errors),
+        cmocka_unit_test(test_spec_ranges),
+        cmocka_unit_test(test_gamma_small_scale),
+        cmocka_unit_test(test_blur_bounded),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
