@@ -184,11 +184,11 @@ static real *geom(hstpf_t *f, uint16_t l)
     return f->grid.geom[l];
 }
 
-/* The no-reversal dynamics of the speed over one step. */
+/* The deterministic speed after one step (below 0: the train comes to
+ * rest within the step; the caller moves that mass to rest). */
 static real speed_map(const hstpf_model_t *m, real v, real dt, real acc)
 {
-    const real vd = v + dt * (acc - m->k0 - (m->k1 + m->k2 * v) * v);
-    return (v >= (real)0 && vd < (real)0) ? (real)0 : vd;
+    return v + dt * (acc - m->k0 - (m->k1 + m->k2 * v) * v);
 }
 
 /* Conservative remap: input cell i covers [a + i w, a + (i + 1) w] in units
@@ -263,13 +263,15 @@ static int kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k,
     return n;
 }
 
-/* Marginals of a model's cells into ms / mv; returns the total mass. */
-static real marginals(hstpf_t *f, const real *p)
+/* Marginals of a model's cells into ms (with the mass at rest) and mv
+ * (moving rows); returns the total mass. */
+static real marginals(hstpf_t *f, const real *p, const real *rest)
 {
     real tot = 0;
     int i, j;
     for (i = 0; i < NS; ++i) {
-        f->grid.ms[i] = 0;
+        f->grid.ms[i] = rest[i]; /* the position marginal includes the mass at rest */
+        tot += rest[i];
     }
     for (j = 0; j < NV; ++j) {
         const real *r = p + j * NS;
@@ -287,10 +289,10 @@ static real marginals(hstpf_t *f, const real *p)
 /* Mean, variance (with the cells' own width) and effective cell count. */
 static void moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
 {
-    const real *p = f->grid.p[l], *g = geom(f, l);
-    double s1 = 0.0, s2 = 0.0, v1 = 0.0, v2 = 0.0, q2 = 0.0;
+    const real *p = f->grid.p[l], *g = geom(f, l), *rest = f->grid.rest[l];
+    double s1 = 0.0, s2 = 0.0, v1 = 0.0, v2 = 0.0, q2 = 0.0, moving = 0.0;
     int i, j;
-    (void)marginals(f, p);
+    (void)marginals(f, p, rest);
     for (i = 0; i < NS; ++i) {
         const double x = (double)g[0] + ((double)i + 0.5) * (double)g[1], w = (double)f->grid.ms[i];
         s1 += w * x;
@@ -300,56 +302,98 @@ static void moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
         const double x = (double)g[2] + ((double)j + 0.5) * (double)g[3], w = (double)f->grid.mv[j];
         v1 += w * x;
         v2 += w * x * x;
+        moving += w;
     }
     for (i = 0; i < NS * NV; ++i) {
         q2 += (double)p[i] * (double)p[i];
     }
+    for (i = 0; i < NS; ++i) {
+        q2 += (double)rest[i] * (double)rest[i];
+    }
     m->s_mean = (real)s1;
     m->v_mean = (real)v1;
-    m->s_var = (real)(s2 - s1 * s1 > 0.0 ? s2 - s1 * s1 : 0.0);
-    m->v_var = (real)(v2 - v1 * v1 > 0.0 ? v2 - v1 * v1 : 0.0);
-    m->held = 0; /* the grid engine does not implement the standstill rules yet */
+    /* variances with each cell's own width (uniform within the cell) */
+    m->s_var = (real)fmax(s2 - s1 * s1 + (double)g[1] * (double)g[1] / 12.0, 0.0);
+    m->v_var = (real)fmax(v2 - v1 * v1 + moving * (double)g[3] * (double)g[3] / 12.0, 0.0);
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
 /* ---- placement -------------------------------------------------------- */
 
-/* A model at the fix yr: s = yr - e with e the measurement noise, v from
- * N(v0, init_speed_sd); cell masses from the two CDFs. */
-static void place_at(hstpf_t *f, hstpf_model_t *m, real yr, real v0, real sdv)
+/* A model from the acquisition fixes. Position: s = y2 - e2, cell masses
+ * from e's CDF. Speed, one fix (t12 = 0): N(v0, init_speed_sd) (a point
+ * when the sd is 0). Two fixes t12 apart: by the model's Euler step from
+ * s1 = y1 - e1, v = (s - y1 + e1 - mu_s)/t12 + t12 a + mu_v, so a speed
+ * cell [w_j, w_j+1] at position s_i holds the probability of e1 in
+ * [t12 (w_j - c) - s_i + y1 + mu_s, ...], c = t12 a + mu_v (a at the
+ * two fixes' mean speed; the process noise over t12 is left out of the
+ * spread, as in the other engines). Speeds below 0 are at rest. */
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
     const uint16_t l = (uint16_t)(m - f->m);
-    real *p = f->grid.p[l], *g = geom(f, l);
-    const real zl = tail_quantile(&f->unit, 0), zh = tail_quantile(&f->unit, 1);
-    real s_lo = yr - tail_quantile(&f->de, 1), s_hi = yr - tail_quantile(&f->de, 0);
-    real v_lo = v0 + sdv * zl, v_hi = v0 + sdv * zh, tot = 0;
+    const hstpf_config_t *c = &f->cfg;
+    real *p = f->grid.p[l], *g = geom(f, l), *rest = f->grid.rest[l];
+    const real y2 = (real)q->y2, y1 = (real)q->y1, t = (real)q->t12;
+    const real el = tail_quantile(&f->de, 0), eh = tail_quantile(&f->de, 1);
+    real s_lo = y2 - eh, s_hi = y2 - el, v_lo, v_hi, tot = 0, cs = 0, mus = 0, sdv = 0;
+    const real v0 = (real)q->v0;
     int i, j;
+    if (t > (real)0) {
+        const real sc = (real)sqrt(q->t12 / c->dt_nominal_s);
+        const real vm = (real)((q->y2 - q->y1) / q->t12), vp = vm > (real)0 ? vm : (real)0;
+        mus = sc * (real)c->noise_s.mean;
+        cs = t * ((real)q->xu - m->k0 - (m->k1 + m->k2 * vp) * vp) + sc * (real)c->noise_v.mean;
+        v_lo = (s_lo - y1 + el - mus) / t + cs;
+        v_hi = (s_hi - y1 + eh - mus) / t + cs;
+    } else {
+        sdv = (real)c->init_speed_sd;
+        v_lo = v0 + sdv * tail_quantile(&f->unit, 0);
+        v_hi = v0 + sdv * tail_quantile(&f->unit, 1);
+    }
+    v_lo = v_lo > (real)0 ? v_lo : (real)0;
+    v_hi = v_hi > v_lo ? v_hi : v_lo;
     if (s_hi - s_lo < DS_MIN * (real)NS) {
         s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
         s_hi = s_lo + DS_MIN * (real)NS;
     }
     if (v_hi - v_lo < DV_MIN * (real)NV) {
-        v_lo = v0 - (real)0.5 * DV_MIN * (real)NV;
+        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
+        v_lo = v_lo > (real)0 ? v_lo : (real)0;
         v_hi = v_lo + DV_MIN * (real)NV;
     }
     g[0] = s_lo;
     g[1] = (s_hi - s_lo) / (real)NS;
     g[2] = v_lo;
     g[3] = (v_hi - v_lo) / (real)NV;
-    for (i = 0; i < NS; ++i) { /* e in [yr - right edge, yr - left edge] */
-        const real x0 = g[0] + (real)i * g[1];
-        f->grid.ms[i] = prob_in(&f->de, yr - (x0 + g[1]), yr - x0);
-    }
-    for (j = 0; j < NV; ++j) {
-        const real x0 = g[2] + (real)j * g[3];
-        f->grid.mv[j] = sdv > (real)0 ? prob_in(&f->unit, (x0 - v0) / sdv, (x0 + g[3] - v0) / sdv)
-                                      : (real)(v0 >= x0 && v0 < x0 + g[3]);
-    }
-    for (j = 0; j < NV; ++j) {
-        for (i = 0; i < NS; ++i) {
-            p[j * NS + i] = f->grid.mv[j] * f->grid.ms[i];
+    for (i = 0; i < NS; ++i) { /* e2 in [y2 - right edge, y2 - left edge] */
+        const real x0 = g[0] + (real)i * g[1], sc_i = x0 + (real)0.5 * g[1];
+        const real ps = prob_in(&f->de, y2 - (x0 + g[1]), y2 - x0);
+        real below;
+        for (j = 0; j < NV; ++j) {
+            const real w0 = g[2] + (real)j * g[3], w1 = w0 + g[3];
+            real pv;
+            if (t > (real)0) {
+                pv = prob_in(&f->de, t * (w0 - cs) - sc_i + y1 + mus, t * (w1 - cs) - sc_i + y1 + mus);
+            } else if (sdv > (real)0) {
+                pv = prob_in(&f->unit, (w0 - v0) / sdv, (w1 - v0) / sdv);
+            } else {
+                pv = (real)(v0 >= w0 && (v0 < w1 || j == NV - 1));
+            }
+            p[j * NS + i] = ps * pv;
             tot += p[j * NS + i];
         }
+        /* speeds below the box's 0 edge: at rest */
+        if (g[2] > (real)0) {
+            below = 0;
+        } else if (t > (real)0) {
+            below = prob_in(&f->de, (real)-3e38, t * (-cs) - sc_i + y1 + mus);
+        } else if (sdv > (real)0) {
+            below = prob_in(&f->unit, (real)-3e38, -v0 / sdv);
+        } else {
+            below = (real)(v0 < (real)0);
+        }
+        rest[i] = ps * below;
+        tot += rest[i];
     }
     if (!(tot > (real)0)) { /* a prior narrower than a cell: all in the middle */
         p[(NV / 2) * NS + NS / 2] = 1;
@@ -358,58 +402,13 @@ static void place_at(hstpf_t *f, hstpf_model_t *m, real yr, real v0, real sdv)
     for (i = 0; i < NS * NV; ++i) {
         p[i] /= tot;
     }
+    for (i = 0; i < NS; ++i) {
+        rest[i] /= tot;
+    }
     f->grid.pred_mass[l] = 1;
     m->loglik = 0;
+    m->held = 0;
     moments(f, m, l);
-}
-
-/* Mean and variance of a noise table, by its own inverse CDF at 256
- * evenly spaced probabilities (any kind of density; init-time accuracy is
- * enough for an acquisition's spread). */
-static void dist_moments(const hstpf_dist_t *d, double *mean, double *var)
-{
-    double s1 = 0.0, s2 = 0.0;
-    uint32_t k;
-    for (k = 0; k < 256u; ++k) {
-        const double x = (double)hstpf__dist_sample(d, (k << 24) + (1u << 23));
-        s1 += x;
-        s2 += x * x;
-    }
-    *mean = s1 / 256.0;
-    *var = s2 / 256.0 - *mean * *mean;
-    *var = *var > 0.0 ? *var : 0.0;
-}
-
-/* From the acquisition fixes: one fix with the configured speed prior, or
- * two fixes t apart with the speed of the model's Euler step from the first
- * to the second, v = (y2 - y1 - mu_s)/t + t a + mu_v, and its sd from the
- * measurement noise, sqrt(2 Var e + Var w_s)/t, taken independent of the
- * position (an approximation of the two-fix posterior, whose s-v
- * correlation the product grid does not hold). */
-static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
-{
-    const hstpf_config_t *c = &f->cfg;
-    if (q->t12 > 0.0) {
-        const double t = q->t12, sc = sqrt(t / c->dt_nominal_s);
-        double me, ve, ms, vs, mv, vv;
-        dist_moments(&f->de, &me, &ve);
-        dist_moments(&f->ds, &ms, &vs);
-        dist_moments(&f->dv, &mv, &vv);
-        vs *= sc * sc;
-        (void)me;
-        (void)vv;
-        {
-        const double v1 = (q->y2 - q->y1 - sc * ms) / t;
-        const double vk = 3.6 * (v1 > 0.0 ? v1 : 0.0);
-        double a = q->xu - f->xi * (f->theta[m - f->m].c0 + f->theta[m - f->m].c1 * vk +
-                                   f->theta[m - f->m].c2 * vk * vk);
-        double v2 = v1 + t * a + sc * mv;
-        v2 = v2 > 0.0 ? v2 : 0.0;
-        place_at(f, m, (real)q->y2, (real)v2, (real)(sqrt(2.0 * ve + vs) / t));
-        }
-    } else {
-        place_at(f, m, (real)q->y2, (real)q->v0, (real)c->init_speed_sd);
-    }
 }
 
 static void place_all(hstpf_t *f, const hstpf__acq_t *q)
@@ -519,9 +518,9 @@ static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, 
  * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
  * +- k sd: a one-sided noise's spike stays inside. */
 static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, int has_y, real yr, real mid,
-                          real *s_lo, real *s_hi, real *v_lo, real *v_hi)
+                          real rest_v, real *s_lo, real *s_hi, real *v_lo, real *v_hi)
 {
-    const real *p = f->grid.p[l], *g = f->grid.geom[l];
+    const real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
     const int nmax = NS * NV / 4;
     real *hist = f->grid.work;
     const real rs = scale * (tail_quantile(&f->ds, 1) - tail_quantile(&f->ds, 0));
@@ -531,8 +530,10 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     /* positions: each occupied row shifted by T times its centre speed */
     x0 = *s_lo;
     h = bin_width(*s_lo, *s_hi, g[1], rs, nmax);
-    n = (int)((*s_hi - *s_lo) / h) + 2;
-    n = n < nmax ? n : nmax;
+    {
+        const real nn = (*s_hi - *s_lo) / h; /* NaN-safe: never more than nmax bins */
+        n = nn >= (real)0 && nn < (real)(nmax - 2) ? (int)nn + 2 : nmax;
+    }
     memset(hist, 0, (size_t)n * sizeof *hist);
     for (j = 0; j < NV; ++j) {
         const real sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
@@ -540,6 +541,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
             remap(p + j * NS, f->grid.first[j], f->grid.last[j], (g[0] + sh - x0) / h, g[1] / h, hist, n);
         }
     }
+    remap(rest, 0, NS - 1, (g[0] - x0) / h, g[1] / h, hist, n); /* at rest: no shift */
     {
         /* the side the measurement lies on keeps its tail to WIDE_TAIL: a
          * model the measurements pull away from its prediction has its
@@ -571,8 +573,10 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
     x0 = *v_lo;
     h = bin_width(*v_lo, *v_hi, g[3], rv, nmax);
-    n = (int)((*v_hi - *v_lo) / h) + 2;
-    n = n < nmax ? n : nmax;
+    {
+        const real nn = (*v_hi - *v_lo) / h;
+        n = nn >= (real)0 && nn < (real)(nmax - 2) ? (int)nn + 2 : nmax;
+    }
     memset(hist, 0, (size_t)n * sizeof *hist);
     for (j = 0; j < NV; ++j) {
         real ta, tb, rm = 0;
@@ -583,8 +587,8 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         for (i = f->grid.first[j]; i <= f->grid.last[j]; ++i) {
             rm += p[j * NS + i];
         }
-        ta = (f->grid.vimg[j] - x0) / h;
-        tb = (f->grid.vimg[j + 1] - x0) / h;
+        ta = ((f->grid.vimg[j] > (real)0 ? f->grid.vimg[j] : (real)0) - x0) / h;
+        tb = ((f->grid.vimg[j + 1] > (real)0 ? f->grid.vimg[j + 1] : (real)0) - x0) / h;
         if (ta > tb) {
             const real t = ta;
             ta = tb;
@@ -597,6 +601,15 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         }
         remap(&rm, 0, 0, ta, tb - ta, hist, n);
     }
+    if (rest_v >= (real)0) { /* the mass at rest starts moving */
+        real rm = 0;
+        for (j = 0; j < NS; ++j) {
+            rm += rest[j];
+        }
+        b = (int32_t)((rest_v - x0) / h);
+        b = b < 0 ? 0 : (b > n - 1 ? n - 1 : b);
+        hist[b] += rm;
+    }
     /* the pull moves the speed the same way (through the s-v correlation) */
     noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
                     (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, v_lo, v_hi);
@@ -608,18 +621,25 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
  * at most KERN_TAIL is left behind; the box is the bounding box of the
  * occupied cells after the dynamics (each row moved by T times its centre
  * speed), so a correlated posterior does not inflate it. */
-static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y, real yr,
+static real transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y, real yr,
                       real *ng)
 {
-    const real *p = f->grid.p[l], *g = geom(f, l);
-    real *w = f->grid.work, *vimg = f->grid.vimg;
+    const real *p = f->grid.p[l], *g = geom(f, l), *rest = f->grid.rest[l];
+    real *w = f->grid.work, *vimg = f->grid.vimg, *row = f->grid.row;
     int16_t *first = f->grid.first, *last = f->grid.last, *box = f->grid.box;
-    real tot = 0, thr, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38, v_hi = (real)-3e38;
+    real tot = 0, rtot = 0, thr, held = 0, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38,
+         v_hi = (real)-3e38;
     const real mid = yr - hstpf__dist_sample(&f->de, 0x80000000u); /* y less e's median */
+    const real a0 = acc - m->k0;                                   /* net acceleration at rest */
+    const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1;         /* < 0: the rest mass is held */
     int i, j, any = 0;
     for (i = 0; i < NS * NV; ++i) {
         tot += p[i];
     }
+    for (i = 0; i < NS; ++i) {
+        rtot += rest[i];
+    }
+    tot += rtot;
     thr = KERN_TAIL * tot / (real)(NS * NV);
     for (j = 0; j < NV; ++j) {
         const real *r = p + j * NS, sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
@@ -641,18 +661,33 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
         s_lo = g[0] + (real)a * g[1] + sh < s_lo ? g[0] + (real)a * g[1] + sh : s_lo;
         s_hi = g[0] + (real)(b + 1) * g[1] + sh > s_hi ? g[0] + (real)(b + 1) * g[1] + sh : s_hi;
         for (i = j; i <= j + 1; ++i) {
-            v_lo = vimg[i] < v_lo ? vimg[i] : v_lo;
-            v_hi = vimg[i] > v_hi ? vimg[i] : v_hi;
+            const real vi = vimg[i] > (real)0 ? vimg[i] : (real)0; /* never below 0 */
+            v_lo = vi < v_lo ? vi : v_lo;
+            v_hi = vi > v_hi ? vi : v_hi;
         }
+    }
+    if (rtot > thr) { /* the mass at rest: no shift; it starts at rest_v if it moves */
+        int a = 0, b = NS - 1;
+        while (a < b && rest[a] <= thr) {
+            ++a;
+        }
+        while (b > a && rest[b] <= thr) {
+            --b;
+        }
+        s_lo = g[0] + (real)a * g[1] < s_lo ? g[0] + (real)a * g[1] : s_lo;
+        s_hi = g[0] + (real)(b + 1) * g[1] > s_hi ? g[0] + (real)(b + 1) * g[1] : s_hi;
+        v_lo = rest_v > (real)0 && rest_v < v_lo ? rest_v : (v_lo < (real)3e38 ? v_lo : (real)0);
+        v_hi = rest_v > v_hi ? rest_v : (v_hi > (real)-3e38 ? v_hi : (real)0);
+        any = 1;
     }
     if (!any) { /* cannot happen (normalised mass); keep the old box */
         s_lo = g[0];
         s_hi = g[0] + (real)NS * g[1];
         v_lo = g[2];
         v_hi = g[2] + (real)NV * g[3];
-    }
-    if (any) {
-        predicted_box(f, l, dt, scale, tot, has_y, yr, mid, &s_lo, &s_hi, &v_lo, &v_hi);
+    } else {
+        predicted_box(f, l, dt, scale, tot, has_y, yr, mid, rtot > (real)0 ? rest_v : (real)-1, &s_lo, &s_hi, &v_lo,
+                      &v_hi);
     }
     if (has_y) {
         /* a measurement whose middle lies beyond the predicted box pulls
@@ -664,12 +699,14 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
             s_hi = yr - e_lo > s_hi ? yr - e_lo : s_hi;
         }
     }
+    v_lo = v_lo > (real)0 ? v_lo : (real)0; /* a train never reverses: the box starts at 0 at most */
     if (s_hi - s_lo < DS_MIN * (real)NS) {
         s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
         s_hi = s_lo + DS_MIN * (real)NS;
     }
     if (v_hi - v_lo < DV_MIN * (real)NV) {
         v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
+        v_lo = v_lo > (real)0 ? v_lo : (real)0;
         v_hi = v_lo + DV_MIN * (real)NV;
     }
     ng[0] = s_lo;
@@ -677,20 +714,27 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
     ng[2] = v_lo;
     ng[3] = (v_hi - v_lo) / (real)NV;
     memset(w, 0, sizeof f->grid.work);
+    memset(f->grid.rnew, 0, sizeof f->grid.rnew);
+    memset(f->grid.rpend, 0, sizeof f->grid.rpend);
     box[0] = NV; /* rows, then columns, of work that receive mass */
     box[1] = -1;
     box[2] = NS;
     box[3] = -1;
     for (j = 0; j < NV; ++j) {
-        real *row = f->grid.row;
-        real ta, tb;
+        real lo_v, hi_v, f0 = 0, rm = 0, ta, tb;
         const real a = (g[0] + dt * (g[2] + ((real)j + (real)0.5) * g[3]) - ng[0]) / ng[1];
         int k, c0, c1;
         if (first[j] > last[j]) {
             continue;
         }
-        ta = (vimg[j] - ng[2]) / ng[3];
-        tb = (vimg[j + 1] - ng[2]) / ng[3];
+        lo_v = vimg[j] < vimg[j + 1] ? vimg[j] : vimg[j + 1];
+        hi_v = vimg[j] < vimg[j + 1] ? vimg[j + 1] : vimg[j];
+        if (hi_v <= (real)0) { /* the whole row comes to rest within the step */
+            f0 = 1;
+        } else if (lo_v < (real)0) {
+            f0 = -lo_v / (hi_v - lo_v);
+            lo_v = 0;
+        }
         /* columns this row reaches */
         c0 = (int)(a + (real)first[j] * g[1] / ng[1]);
         c1 = (int)(a + (real)(last[j] + 1) * g[1] / ng[1]);
@@ -700,19 +744,26 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
             row[i] = 0;
         }
         remap(p + j * NS, first[j], last[j], a, g[1] / ng[1], row, NS);
+        if (f0 > (real)0) { /* s' = s + T v, v' = 0: to rest, position noise to come */
+            for (i = c0; i <= c1; ++i) {
+                f->grid.rpend[i] += f0 * row[i];
+                rm += row[i];
+            }
+            held += f0 * rm;
+            if (f0 >= (real)1) {
+                continue;
+            }
+        }
         box[2] = (int16_t)(c0 < box[2] ? c0 : box[2]);
         box[3] = (int16_t)(c1 > box[3] ? c1 : box[3]);
-        if (ta > tb) {
-            const real t = ta;
-            ta = tb;
-            tb = t;
-        }
+        ta = (lo_v - ng[2]) / ng[3];
+        tb = (hi_v - ng[2]) / ng[3];
         if (tb - ta < (real)1e-6) { /* the whole row maps to one speed */
             ta = tb = ta < (real)0 ? (real)0 : (ta > (real)(NV - 1) ? (real)(NV - 1) : ta);
         }
         for (k = ta > (real)0 ? (int32_t)ta : 0; k < NV && (k == (int32_t)ta || (real)k < tb); ++k) {
             const real lo = ta > (real)k ? ta : (real)k, hi = tb < (real)(k + 1) ? tb : (real)(k + 1);
-            const real frac = tb > ta ? (hi - lo) / (tb - ta) : (real)1;
+            const real frac = (tb > ta ? (hi - lo) / (tb - ta) : (real)1) * ((real)1 - f0);
             real *o = w + k * NS;
             if (frac > (real)0) {
                 for (i = c0; i <= c1; ++i) {
@@ -723,64 +774,110 @@ static void transport(hstpf_t *f, hstpf_model_t *m, uint16_t l, real dt, real ac
             }
         }
     }
+    if (rtot > (real)0) { /* the mass at rest, on the new position cells */
+        memset(row, 0, sizeof f->grid.row);
+        remap(rest, 0, NS - 1, (g[0] - ng[0]) / ng[1], g[1] / ng[1], row, NS);
+        if (rest_v < (real)0) { /* held: s' = s, v' = 0, no process noise */
+            for (i = 0; i < NS; ++i) {
+                f->grid.rnew[i] += row[i];
+            }
+            held += rtot;
+        } else { /* starts moving: v' = T a0 + noise */
+            int k = (int32_t)((rest_v - ng[2]) / ng[3]);
+            k = k < 0 ? 0 : (k > NV - 1 ? NV - 1 : k);
+            for (i = 0; i < NS; ++i) {
+                w[k * NS + i] += row[i];
+            }
+            box[0] = (int16_t)(k < box[0] ? k : box[0]);
+            box[1] = (int16_t)(k > box[1] ? k : box[1]);
+            box[2] = 0;
+            box[3] = NS - 1;
+        }
+    }
+    return tot > (real)0 ? held / tot : (real)0;
 }
 
 /* Step 3: speed noise from work into p, then position noise in place; only
  * the rows and columns that can receive mass are visited. */
+/* Position noise on one row, in place over [c0, c1] -> [o0, o1]. */
+static void conv_row(real *o, real *row, int c0, int c1, const real *ks, int nks, int m0s)
+{
+    const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
+    int i, k;
+    for (i = c0; i <= c1; ++i) {
+        row[i] = o[i];
+        o[i] = 0;
+    }
+    for (i = o0; i <= o1; ++i) { /* gather: cell i from i - m0s - k */
+        const int ka = i - m0s - c1 > 0 ? i - m0s - c1 : 0;
+        const int kb = i - m0s - c0 < nks - 1 ? i - m0s - c0 : nks - 1;
+        const real *src = row + (i - m0s);
+        real acc = 0;
+        for (k = ka; k <= kb; ++k) {
+            acc += ks[k] * src[-k];
+        }
+        o[i] = acc;
+    }
+}
+
+/* Step 3: speed noise from work into p (what it would take below 0 goes to
+ * rest: a train never reverses), then position noise in place, also on the
+ * mass that came to rest within the step; the held mass gets none. Only
+ * the rows and columns that can receive mass are visited. */
 static void diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
 {
     real *p = f->grid.p[l], *w = f->grid.work, *row = f->grid.row, *kv = f->grid.kv, *ks = f->grid.ks;
+    real *rest = f->grid.rest[l], *rpend = f->grid.rpend;
     int16_t *box = f->grid.box;
-    int m0v, m0s, nkv, nks, j, k, i, r0, r1, c0, c1;
+    int m0v, m0s, nkv, nks, j, k, i, r0 = 0, r1 = -1, c0 = 0, c1 = -1;
     nkv = kernel(&f->dv, scale, ng[3], NV - 1, kv, &m0v);
     nks = kernel(&f->ds, scale, ng[1], NS - 1, ks, &m0s);
     memset(p, 0, sizeof f->grid.p[l]);
-    if (box[1] < box[0]) {
-        return;
-    }
-    r0 = box[0] + m0v;
-    r1 = box[1] + m0v + nkv - 1;
-    r0 = r0 < 0 ? 0 : r0;
-    r1 = r1 > NV - 1 ? NV - 1 : r1;
-    c0 = box[2];
-    c1 = box[3];
-    for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
-        real *o = p + j * NS;
-        for (k = 0; k < nkv; ++k) {
-            const int src = j - m0v - k;
-            const real c = kv[k];
-            const real *r;
-            if (src < box[0] || src > box[1] || c <= (real)0) {
-                continue;
-            }
-            r = w + src * NS;
-            for (i = c0; i <= c1; ++i) {
-                o[i] += c * r[i];
-            }
-        }
-    }
-    if (nks == 1 && m0s == 0) {
-        return;
-    }
-    {
-        const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
-        for (j = r0; j <= r1; ++j) {
+    if (box[1] >= box[0]) {
+        r0 = box[0] + m0v;
+        r1 = box[1] + m0v + nkv - 1;
+        r0 = r0 < 0 ? 0 : r0;
+        r1 = r1 > NV - 1 ? NV - 1 : r1;
+        c0 = box[2];
+        c1 = box[3];
+        for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
             real *o = p + j * NS;
-            for (i = c0; i <= c1; ++i) {
-                row[i] = o[i];
-                o[i] = 0;
-            }
-            for (i = o0; i <= o1; ++i) { /* gather: cell i from i - m0s - k */
-                const int ka = i - m0s - c1 > 0 ? i - m0s - c1 : 0;
-                const int kb = i - m0s - c0 < nks - 1 ? i - m0s - c0 : nks - 1;
-                const real *src = row + (i - m0s);
-                real acc = 0;
-                for (k = ka; k <= kb; ++k) {
-                    acc += ks[k] * src[-k];
+            for (k = 0; k < nkv; ++k) {
+                const int src = j - m0v - k;
+                const real c = kv[k];
+                const real *r;
+                if (src < box[0] || src > box[1] || c <= (real)0) {
+                    continue;
                 }
-                o[i] = acc;
+                r = w + src * NS;
+                for (i = c0; i <= c1; ++i) {
+                    o[i] += c * r[i];
+                }
             }
         }
+        if (ng[2] <= (real)0) { /* the box starts at 0: what falls below is at rest */
+            for (j = box[0]; j <= box[1]; ++j) {
+                const real *r = w + j * NS;
+                real c = 0;
+                for (k = 0; k < nkv && j + m0v + k < 0; ++k) {
+                    c += kv[k];
+                }
+                if (c > (real)0) {
+                    for (i = c0; i <= c1; ++i) {
+                        rpend[i] += c * r[i];
+                    }
+                }
+            }
+        }
+    }
+    if (!(nks == 1 && m0s == 0)) {
+        for (j = r0; j <= r1; ++j) {
+            conv_row(p + j * NS, row, c0, c1, ks, nks, m0s);
+        }
+        conv_row(rpend, row, 0, NS - 1, ks, nks, m0s);
+    }
+    for (i = 0; i < NS; ++i) {
+        rest[i] = f->grid.rnew[i] + rpend[i];
     }
 }
 
@@ -791,7 +888,7 @@ static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
     real *p = f->grid.p[l], *g = geom(f, l), *ll = f->grid.row;
     real lmax = (real)-3e38, sum = 0, inv;
     int i, j, all_floor = 1;
-    (void)marginals(f, p);
+    (void)marginals(f, p, f->grid.rest[l]);
     for (i = 0; i < NS; ++i) {
         const real x0 = g[0] + (real)i * g[1];
         const real lc = cell_loglik(de, yr - (x0 + g[1]), yr - x0);
@@ -820,6 +917,10 @@ static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
             sum += r[i];
         }
     }
+    for (i = 0; i < NS; ++i) {
+        f->grid.rest[l][i] *= ll[i];
+        sum += f->grid.rest[l][i];
+    }
     if (!(sum > (real)0)) { /* every cell underflowed: keep the prediction */
         return lmax;
     }
@@ -827,7 +928,23 @@ static real measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
     for (i = 0; i < NS * NV; ++i) {
         p[i] *= inv;
     }
+    for (i = 0; i < NS; ++i) {
+        f->grid.rest[l][i] *= inv;
+    }
     return lmax + (real)log((double)sum);
+}
+
+static real mass_of(const hstpf_t *f, uint16_t l)
+{
+    real t = 0;
+    int i;
+    for (i = 0; i < NS * NV; ++i) {
+        t += f->grid.p[l][i];
+    }
+    for (i = 0; i < NS; ++i) {
+        t += f->grid.rest[l][i];
+    }
+    return t;
 }
 
 /* Predict (and measure) one model with the box tail f->grid.tail. */
@@ -835,18 +952,18 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
 {
     const uint16_t l = (uint16_t)(m - f->m);
     const real dt = (real)st->dt, scale = (real)st->scale;
-    real ng[4], tot = 0;
+    real ng[4], tot, held;
     real *p = f->grid.p[l], *g = geom(f, l);
     int i;
-    transport(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng);
+    held = transport(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng);
     diffuse(f, l, scale, ng);
     g[0] = ng[0];
     g[1] = ng[1];
     g[2] = ng[2];
     g[3] = ng[3];
-    for (i = 0; i < NS * NV; ++i) {
-        tot += p[i];
-    }
+    /* the whole posterior at rest: held, or come to rest within the step */
+    m->held = (uint8_t)(held >= (real)(1.0 - 1e-6));
+    tot = mass_of(f, l);
     f->grid.pred_mass[l] = tot;
     m->loglik = 0;
     if (st->has_y) {
@@ -856,17 +973,10 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
         for (i = 0; i < NS * NV; ++i) {
             p[i] *= inv;
         }
+        for (i = 0; i < NS; ++i) {
+            f->grid.rest[l][i] *= inv;
+        }
     }
-}
-
-static real mass_of(const real *p)
-{
-    real t = 0;
-    int i;
-    for (i = 0; i < NS * NV; ++i) {
-        t += p[i];
-    }
-    return t;
 }
 
 /* One model's step. A model that was tracking and now misses the
@@ -889,20 +999,27 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     }
     if (st->has_y) {
         memcpy(f->grid.save, f->grid.p[l], sizeof f->grid.p[l]);
-        memcpy(f->grid.save + NS * NV, f->grid.geom[l], sizeof f->grid.geom[l]);
+        memcpy(f->grid.save + NS * NV, f->grid.rest[l], sizeof f->grid.rest[l]);
+        memcpy(f->grid.save + NS * NV + NS, f->grid.geom[l], sizeof f->grid.geom[l]);
     }
     f->grid.tail = GRID_TAIL;
     model_pass(f, m, st, acc);
-    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !(mass_of(f->grid.p[l]) > (real)0))) {
+    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !(mass_of(f, l) > (real)0))) {
         memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
-        memcpy(f->grid.geom[l], f->grid.save + NS * NV, sizeof f->grid.geom[l]);
+        memcpy(f->grid.rest[l], f->grid.save + NS * NV, sizeof f->grid.rest[l]);
+        memcpy(f->grid.geom[l], f->grid.save + NS * NV + NS, sizeof f->grid.geom[l]);
         m->floor_run = run;
         m->floor_hits = hits;
         f->grid.tail = WIDE_TAIL;
         model_pass(f, m, st, acc);
     }
-    if (!(mass_of(f->grid.p[l]) > (real)0)) {
-        place_at(f, m, st->has_y ? (real)st->yr : m->s_mean, v_was, (real)f->cfg.init_speed_sd);
+    if (!(mass_of(f, l) > (real)0)) {
+        hstpf__acq_t q;
+        memset(&q, 0, sizeof q);
+        q.y2 = st->has_y ? st->yr : (double)m->s_mean;
+        q.y1 = q.y2;
+        q.v0 = (double)v_was;
+        place_one(f, m, &q);
         m->loglik = st->has_y ? f->de.floor : (real)0;
         m->floor_hits = hits + (st->has_y ? 1u : 0u);
         m->floor_run = (uint16_t)(run + (st->has_y ? 1u : 0u));

@@ -95,7 +95,7 @@ static void usage(void)
             "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]... [--version]\n"
             "  MxN: M models, N particles; MxK: M models, Kalman engine; MxG: grid engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
-            "           --config 3xK --config 17xK\n");
+            "           --config 3xK --config 17xK --config 3xG --config 17xG\n");
 }
 
 static int fill_models(hstpf_theta_t *models, unsigned m)

@@ -375,7 +375,9 @@ typedef struct {
     hstpf_real_t geom[HSTPF_MAX_MODELS][4];              /* s0, ds, v0, dv: first edges, widths */
     hstpf_real_t pred_mass[HSTPF_MAX_MODELS];            /* mass kept by the last prediction */
     hstpf_real_t work[HSTPF__GRID_CELLS];                /* the transported grid */
-    hstpf_real_t save[HSTPF__GRID_CELLS + 4];            /* a model's cells before the step */
+    hstpf_real_t rest[HSTPF_MAX_MODELS][HSTPF_GRID_NS];  /* mass at rest (v = 0), per position cell */
+    hstpf_real_t rnew[HSTPF_GRID_NS], rpend[HSTPF_GRID_NS]; /* rest being built: held, and to be diffused */
+    hstpf_real_t save[HSTPF__GRID_CELLS + HSTPF_GRID_NS + 4]; /* a model's cells before the step */
     hstpf_real_t tail;                                   /* mass a box leaves out per side */
     hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
     hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
