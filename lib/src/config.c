@@ -26,7 +26,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->noise_e.sd = sqrt(5.0);
     cfg->dt_nominal_s = 1.0;
     cfg->init_speed_mps = 0.0;
-    cfg->init_speed_sd = 1.0;
+    cfg->init_speed_sd = 0.0; /* unknown: from the first two fixes */
     cfg->resample = HSTPF_RESAMPLE_ESS;
     cfg->ess_threshold = 0.5;
     cfg->roughening_k = 0.2;
@@ -38,6 +38,10 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->max_gap_s = 30.0;
     cfg->gate_m = 1000.0;
     cfg->reacquire_after = 5;
+    cfg->refine = 0; /* opt-in: docs/results.md measures what it costs */
+    cfg->refine_prior_q = 0.01;
+    cfg->refine_spread = 0.2;
+    cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
     return HSTPF_OK;
 }
 
@@ -78,6 +82,9 @@ static const range_t ranges[] = {
     ROW(max_gap_s, 1e-6, 0, HSTPF_DT_MAX_S, 0, HSTPF_E_CONFIG),
     ROW(gate_m, 0.0, 0, HSTPF_POS_MAX_M, 0, HSTPF_E_CONFIG),
     ROW(e_blur_sd, 0.0, 0, 100.0, 0, HSTPF_E_CONFIG),
+    ROW(refine_prior_q, 0.0, 0, 0.5, 0, HSTPF_E_CONFIG),
+    ROW(refine_spread, 0.0, 0, 1.0, 0, HSTPF_E_CONFIG),
+    ROW(refine_gain_sd, 0.0, 0, 0.5, 0, HSTPF_E_CONFIG),
 };
 
 static int in_range(const range_t *r, double x)
@@ -150,6 +157,9 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     }
     if (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) {
         return fail(field, "weight_method", HSTPF_E_CONFIG);
+    }
+    if (c->refine > 1u) {
+        return fail(field, "refine", HSTPF_E_CONFIG);
     }
     return HSTPF_OK;
 }

@@ -16,13 +16,37 @@ typedef struct {
     int has_y;        /* a measurement this step */
 } hstpf__step_t;
 
+/* An acquisition: the fixes a model's state is placed from. With t12 > 0,
+ * y1 was measured t12 seconds before y2 and the speed prior is diffuse: the
+ * state at y2's time follows from both fixes and the model's dynamics over
+ * t12 (traction xu). With t12 == 0, y2 alone with the configured speed
+ * prior N(v0, init_speed_sd). */
 typedef struct {
-    /* Every model placed at the first fix yr with prior speed mean v0. */
-    void (*place_all)(hstpf_t *f, hstpf_real_t yr, hstpf_real_t v0);
-    /* One model placed again at the fix (it lost the train). */
-    void (*place_one)(hstpf_t *f, hstpf_model_t *m, hstpf_real_t yr, hstpf_real_t v0);
+    double y1, y2;    /* relative to the origin, m */
+    double t12;       /* s, >= 0 */
+    double xu;        /* xi * traction over t12, m/s^2 */
+    double v0;        /* prior speed mean (t12 == 0), m/s */
+} hstpf__acq_t;
+
+/*
+ * Standstill physics, which every engine implements (docs/model.md):
+ * - the speed is never below 0: braking and resistance bring a train to
+ *   rest and no further; a step whose deterministic speed would cross 0
+ *   ends at rest, v' = 0 exactly;
+ * - a state at rest (v == 0) whose net acceleration xu - k0 - g <= 0 is
+ *   held: s' = s, v' = 0, no process noise;
+ * - m->held = 1 when the model's whole posterior ends the step at rest
+ *   (held, or come to rest within it): then neither s' = s + T v nor
+ *   v' = 0 involves W, and the step carries no evidence about it.
+ */
+typedef struct {
+    /* Every model placed from the acquisition fixes. */
+    void (*place_all)(hstpf_t *f, const hstpf__acq_t *a);
+    /* One model placed again (it lost the train). */
+    void (*place_one)(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *a);
     /* Predict and (with a measurement) update every model: sets each
-     * model's loglik, s_mean, v_mean, ess and floor counters. */
+     * model's loglik, s_mean, v_mean, s_var, v_var, held, ess and floor
+     * counters. */
     void (*predict_update)(hstpf_t *f, const hstpf__step_t *st);
     /* After the model weights were updated (the paired bank resamples here);
      * NULL when the engine has nothing to do. */

@@ -10,25 +10,59 @@
 
 typedef hstpf_real_t real;
 
-/* The same prior as the particle engine's cloud, as a Gaussian. */
-static void place_one(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+static void publish(const hstpf_t *f, hstpf_model_t *m)
 {
-    const double sde = f->cfg.noise_e.sd, sdv = f->cfg.init_speed_sd;
-    m->kx[0] = (double)yr - f->cfg.noise_e.mean;
-    m->kx[1] = (double)v0;
-    m->kp[0] = sde * sde;
-    m->kp[1] = 0.0;
-    m->kp[2] = sdv * sdv;
     m->s_mean = (real)m->kx[0];
     m->v_mean = (real)m->kx[1];
+    m->s_var = (real)m->kp[0];
+    m->v_var = (real)m->kp[2];
     m->ess = (real)f->cfg.n_particles;
 }
 
-static void place_all(hstpf_t *f, real yr, real v0)
+/* Net deterministic acceleration of a model at (s, v), m/s^2. */
+static double accel(hstpf_t *f, hstpf_model_t *m, double xu, double s, double v)
+{
+    double a = xu - (double)m->k0 - ((double)m->k1 + (double)m->k2 * v) * v;
+    if (f->cfg.n_track > 0u) {
+        a -= (double)hstpf__track_acc(f, &m->track_hint, (real)s);
+    }
+    return a;
+}
+
+/* Two fixes, diffuse speed: s2 = y2 - e2, and with the model's Euler step
+ * s2 = s1 + t v1 + w_s, v2 = v1 + t a + w_v, s1 = y1 - e1:
+ *   v2 = (y2 - y1 - mu_s)/t + t a + mu_v + (e1 - e2 - w_s)/t + w_v,
+ *   P = [R, R/t; R/t, (2R + Q_s)/t^2 + Q_v]. A single fix takes the
+ * configured prior. The speed is then kept >= 0. */
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+{
+    const hstpf_config_t *c = &f->cfg;
+    const double r = c->noise_e.sd * c->noise_e.sd;
+    m->kx[0] = q->y2 - c->noise_e.mean;
+    m->kp[0] = r;
+    if (q->t12 > 0.0) {
+        const double t = q->t12, sc = sqrt(t / c->dt_nominal_s);
+        const double qs = sc * sc * c->noise_s.sd * c->noise_s.sd;
+        const double qv = sc * sc * c->noise_v.sd * c->noise_v.sd;
+        const double v1 = (q->y2 - q->y1 - sc * c->noise_s.mean) / t;
+        m->kx[1] = v1 + t * accel(f, m, q->xu, m->kx[0], v1 > 0.0 ? v1 : 0.0) + sc * c->noise_v.mean;
+        m->kp[1] = r / t;
+        m->kp[2] = (2.0 * r + qs) / (t * t) + qv;
+    } else {
+        m->kx[1] = q->v0;
+        m->kp[1] = 0.0;
+        m->kp[2] = c->init_speed_sd * c->init_speed_sd;
+    }
+    m->kx[1] = m->kx[1] > 0.0 ? m->kx[1] : 0.0;
+    m->held = 0;
+    publish(f, m);
+}
+
+static void place_all(hstpf_t *f, const hstpf__acq_t *a)
 {
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
-        place_one(f, &f->m[l], yr, v0);
+        place_one(f, &f->m[l], a);
     }
 }
 
@@ -46,23 +80,34 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     const double s = m->kx[0], v = m->kx[1];
     const double pss = m->kp[0], psv = m->kp[1], pvv = m->kp[2];
     const double sc2 = scale * scale;
-    double a = st->xu - (double)m->k0 - ((double)m->k1 + (double)m->k2 * v) * v, vd, fvv, ns, nv;
+    const double a = accel(f, m, st->xu, s, v);
+    double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v), ns, nv;
     double qss, qsv, qvv;
-    if (c->n_track > 0u) {
-        a -= (double)hstpf__track_acc(f, &m->track_hint, (real)s);
+    m->held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
+    if (m->held) {
+        /* at rest and nothing can start it: no motion, no process noise */
+        ns = s;
+        nv = 0.0;
+        qss = pss;
+        qsv = 0.0;
+        qvv = 0.0;
+    } else if (vd < 0.0) {
+        /* comes to rest within the step: v' = 0 exactly; s' = s + dt v and
+         * v' do not involve W, so for the weights this is standstill too */
+        m->held = 1;
+        ns = s + dt * v + scale * c->noise_s.mean;
+        nv = 0.0;
+        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
+        qsv = 0.0;
+        qvv = 0.0;
+    } else {
+        ns = s + dt * v + scale * c->noise_s.mean;
+        nv = vd + scale * c->noise_v.mean;
+        /* P = F P F' + Q with F = [1 dt; 0 fvv] */
+        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
+        qsv = fvv * (psv + dt * pvv);
+        qvv = fvv * fvv * pvv + sc2 * c->noise_v.sd * c->noise_v.sd;
     }
-    vd = v + dt * a;
-    fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v);
-    if (v >= 0.0 && vd < 0.0) {
-        vd = 0.0;
-        fvv = 0.0;
-    }
-    ns = s + dt * v + scale * c->noise_s.mean;
-    nv = vd + scale * c->noise_v.mean;
-    /* P = F P F' + Q with F = [1 dt; 0 fvv] */
-    qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
-    qsv = fvv * (psv + dt * pvv);
-    qvv = fvv * fvv * pvv + sc2 * c->noise_v.sd * c->noise_v.sd;
     m->loglik = 0;
     if (st->has_y) {
         const double sy = qss + c->noise_e.sd * c->noise_e.sd;
@@ -92,13 +137,11 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         qss = qss > 0.0 ? qss : 0.0;
     }
     m->kx[0] = ns;
-    m->kx[1] = nv;
+    m->kx[1] = nv > 0.0 ? nv : 0.0; /* a train never reverses */
     m->kp[0] = qss;
     m->kp[1] = qsv;
     m->kp[2] = qvv;
-    m->s_mean = (real)ns;
-    m->v_mean = (real)nv;
-    m->ess = (real)c->n_particles;
+    publish(f, m);
 }
 
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)

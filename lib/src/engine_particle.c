@@ -18,59 +18,108 @@ static int paired_bank(const hstpf_t *f)
     return f->cfg.bank == HSTPF_BANK_PAIRED;
 }
 
-/* Draws for a cloud at a fix: measurement-noise samples into nz_s and unit
- * Gaussians into nz_v, interleaved per particle. */
-static void draw_fix(hstpf_t *f, hstpf_rng_t *rng)
+/* Draws for a cloud: per particle, a measurement-noise sample into nz_s
+ * and either a second one (two fixes) or a unit Gaussian (one fix with the
+ * speed prior) into nz_v. */
+static void draw_fix(hstpf_t *f, hstpf_rng_t *rng, int two)
 {
+    const hstpf_dist_t *d2 = two ? &f->de : &f->unit;
     uint16_t i;
     for (i = 0; i < f->cfg.n_particles; ++i) {
         f->nz_s[i] = hstpf__dist_sample(&f->de, hstpf__rng_next(rng));
-        f->nz_v[i] = hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+        f->nz_v[i] = hstpf__dist_sample(d2, hstpf__rng_next(rng));
     }
 }
 
-/* A cloud at the fix yr from the draws: s = yr - e_i, so that the prior is
- * the measurement's own posterior; v = v0 + init_speed_sd z_i; equal weights. */
-static void place_cloud(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+static real accel(hstpf_t *f, hstpf_model_t *m, real xu, real s, real v)
+{
+    real a = xu - m->k0 - (m->k1 + m->k2 * v) * v;
+    if (f->cfg.n_track > 0u) {
+        a -= hstpf__track_acc(f, &m->track_hint, s);
+    }
+    return a;
+}
+
+/* Weighted moments of the cloud from the normalised weights w (NULL:
+ * equal weights). */
+static void moments(hstpf_t *f, hstpf_model_t *m, const real *w)
 {
     const uint16_t n = f->cfg.n_particles;
-    const real lw0 = (real)-log((double)n);
-    double ss = 0.0, sv = 0.0;
+    real ms = 0, mv = 0, vs = 0, vv = 0, sw2 = 0;
     uint16_t i;
     for (i = 0; i < n; ++i) {
-        m->s[i] = yr - f->nz_s[i];
-        m->v[i] = v0 + (real)f->cfg.init_speed_sd * f->nz_v[i];
-        m->lw[i] = lw0;
-        ss += (double)m->s[i];
-        sv += (double)m->v[i];
+        const real wi = w != NULL ? w[i] : (real)1 / (real)n;
+        ms += wi * m->s[i];
+        mv += wi * m->v[i];
+        sw2 += wi * wi;
     }
-    m->s_mean = (real)(ss / n);
-    m->v_mean = (real)(sv / n);
-    m->ess = (real)n;
+    for (i = 0; i < n; ++i) {
+        const real wi = w != NULL ? w[i] : (real)1 / (real)n;
+        const real ds = m->s[i] - ms, dv = m->v[i] - mv;
+        vs += wi * ds * ds;
+        vv += wi * dv * dv;
+    }
+    m->s_mean = (real)ms;
+    m->v_mean = (real)mv;
+    m->s_var = (real)vs;
+    m->v_var = (real)vv;
+    m->ess = (real)1 / sw2;
 }
 
-/* Every model at the first fix; the paired bank gives every model the same
- * particles. */
-static void place_all(hstpf_t *f, real yr, real v0)
+/* A cloud from the draws, equal weights. One fix: s = y2 - e_i, so that the
+ * prior is the measurement's own posterior, v = v0 + init_speed_sd z_i. Two
+ * fixes t12 apart: s = y2 - e2_i, and by the model's Euler step from
+ * s1 = y1 - e1_i the speed v = (s - s1 - mu_s)/t12 + t12 a + mu_v, kept
+ * >= 0 (the process noise over t12 is left out of the spread: it is small
+ * beside the measurement noise's). */
+static void place_cloud(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
-    const int paired = paired_bank(f);
+    const hstpf_config_t *c = &f->cfg;
+    const uint16_t n = c->n_particles;
+    const real lw0 = (real)-log((double)n);
+    const real y2 = (real)q->y2;
+    uint16_t i;
+    for (i = 0; i < n; ++i) {
+        real v;
+        m->s[i] = y2 - f->nz_s[i];
+        if (q->t12 > 0.0) {
+            const double sc = sqrt(q->t12 / c->dt_nominal_s);
+            const real t = (real)q->t12;
+            const real v1 = ((real)(q->y2 - q->y1 - sc * c->noise_s.mean) - f->nz_s[i] + f->nz_v[i]) / t;
+            v = v1 + t * accel(f, m, (real)q->xu, m->s[i], v1 > (real)0 ? v1 : (real)0) +
+                (real)(sc * c->noise_v.mean);
+        } else {
+            v = (real)q->v0 + (real)c->init_speed_sd * f->nz_v[i];
+        }
+        m->v[i] = v > (real)0 ? v : (real)0;
+        m->lw[i] = lw0;
+    }
+    m->held = 0;
+    moments(f, m, NULL);
+}
+
+/* Every model from the acquisition fixes; the paired bank gives every model
+ * the same draws. */
+static void place_all(hstpf_t *f, const hstpf__acq_t *q)
+{
+    const int paired = paired_bank(f), two = q->t12 > 0.0;
     uint16_t l;
     if (paired) {
-        draw_fix(f, &f->rng);
+        draw_fix(f, &f->rng, two);
     }
     for (l = 0; l < f->cfg.n_models; ++l) {
         if (!paired) {
-            draw_fix(f, &f->m[l].rng);
+            draw_fix(f, &f->m[l].rng, two);
         }
-        place_cloud(f, &f->m[l], yr, v0);
+        place_cloud(f, &f->m[l], q);
     }
 }
 
 /* One model that lost the train, from its own stream. */
-static void place_one(hstpf_t *f, hstpf_model_t *m, real yr, real v0)
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
-    draw_fix(f, &m->rng);
-    place_cloud(f, m, yr, v0);
+    draw_fix(f, &m->rng, q->t12 > 0.0);
+    place_cloud(f, m, q);
 }
 
 /* The cumulative count is clamped to [previous, n]; a particle of weight 0
@@ -167,8 +216,9 @@ static void roughen(hstpf_t *f, hstpf_model_t *m)
     ks = ks > (real)f->cfg.rough_min_s ? ks : (real)f->cfg.rough_min_s;
     kv = kv > (real)f->cfg.rough_min_v ? kv : (real)f->cfg.rough_min_v;
     for (i = 0; i < n; ++i) {
+        const real vn = m->v[i] + kv * f->nz_v[i];
         m->s[i] += ks * f->nz_s[i];
-        m->v[i] += kv * f->nz_v[i];
+        m->v[i] = vn > (real)0 ? vn : (real)0; /* a train never reverses */
     }
 }
 
@@ -210,22 +260,25 @@ static real max_of(const real *x, uint16_t n)
 static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has_y, real yr, real *w)
 {
     const uint16_t n = f->cfg.n_particles;
-    real sw2 = 0, ms = 0, mv = 0, inc = 0, lmax = (real)-3e38;
-    uint16_t i, at_floor = 0;
-    const int track = f->cfg.n_track > 0u;
+    real inc = 0, lmax = (real)-3e38;
+    uint16_t i, at_floor = 0, held = 0;
 
     for (i = 0; i < n; ++i) {
         const real s = m->s[i], v = m->v[i];
-        real a = xu - m->k0 - (m->k1 + m->k2 * v) * v, vd;
-        if (track) {
-            a -= hstpf__track_acc(f, &m->track_hint, s);
+        const real a = accel(f, m, xu, s, v);
+        const real vd = v + dt * a;
+        if (v <= (real)0 && a <= (real)0) {
+            m->v[i] = 0; /* held at rest: no motion, no process noise */
+            ++held;
+        } else if (vd < (real)0) {
+            m->s[i] = s + dt * v + f->nz_s[i];
+            m->v[i] = 0; /* comes to rest within the step: no W in s' or v' */
+            ++held;
+        } else {
+            const real vn = vd + f->nz_v[i];
+            m->s[i] = s + dt * v + f->nz_s[i];
+            m->v[i] = vn > (real)0 ? vn : (real)0; /* a train never reverses */
         }
-        vd = v + dt * a;
-        if (v >= (real)0 && vd < (real)0) {
-            vd = 0; /* resistance and braking cannot reverse the train */
-        }
-        m->s[i] = s + dt * v + f->nz_s[i];
-        m->v[i] = vd + f->nz_v[i];
         if (has_y) {
             const real l = hstpf__dist_logpdf(&f->de, yr - m->s[i]);
             at_floor = (uint16_t)(at_floor + (l <= f->de.floor));
@@ -233,6 +286,7 @@ static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
         }
         lmax = m->lw[i] > lmax ? m->lw[i] : lmax;
     }
+    m->held = (uint8_t)(held == n);
     if (has_y && at_floor == n) {
         ++m->floor_hits;
         ++m->floor_run;
@@ -241,18 +295,11 @@ static void model_update(hstpf_t *f, hstpf_model_t *m, real dt, real xu, int has
     }
     /* lw was normalised, so the log of the new sum is log sum W_i p(y|x_i) */
     inc = normalise(f, m, w, lmax);
-    for (i = 0; i < n; ++i) {
-        sw2 += w[i] * w[i];
-        ms += w[i] * m->s[i];
-        mv += w[i] * m->v[i];
-    }
-    m->s_mean = ms;
-    m->v_mean = mv;
-    m->ess = (real)1 / sw2;
+    moments(f, m, w);
     if (!has_y) {
         inc = 0;
     } else if (f->cfg.weight_method == HSTPF_WEIGHT_PAPER) {
-        inc = hstpf__dist_logpdf(&f->de, yr - ms);
+        inc = hstpf__dist_logpdf(&f->de, yr - m->s_mean);
     }
     m->loglik = inc;
 }

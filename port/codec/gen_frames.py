@@ -36,6 +36,29 @@ def raw_limits(sig):
     return lo, hi
 
 
+PROFILE = "P01"  # the one E2E profile hstpf_e2e.[ch] implements
+
+
+def attr(db, msg, name):
+    """A message attribute, else its BA_DEF_DEF_ default."""
+    a = msg.dbc.attributes.get(name) if msg is not None else db.dbc.attributes.get(name)
+    if a is not None:
+        return a.value
+    d = db.dbc.attribute_definitions.get(name)
+    if d is None or d.default_value is None:
+        raise SystemExit(f"{msg.name if msg else 'network'}: no {name} attribute and no default")
+    return d.default_value
+
+
+def e2e_params(db, msg):
+    """(max delta counter, timeout ms) of a frame's receiver, checked against
+    the ranges hstpf_e2e_rx_init() accepts."""
+    md, to = int(attr(db, msg, "HstpfE2EMaxDeltaCounter")), int(attr(db, msg, "HstpfE2ETimeoutMs"))
+    if not 1 <= md <= 13 or not 0 < to < 0x80000000:
+        raise SystemExit(f"{msg.name}: HstpfE2EMaxDeltaCounter {md} not in 1..13 or HstpfE2ETimeoutMs {to} not > 0")
+    return md, to
+
+
 def check_e2e_layout(msg):
     crc = msg.get_signal_by_name("E2eCrc")
     cnt = msg.get_signal_by_name("E2eCounter")
@@ -53,6 +76,8 @@ def main():
     dbc, outdir = Path(sys.argv[1]), Path(sys.argv[2])
     db = cantools.database.load_file(str(dbc))
     msgs = sorted(db.messages, key=lambda m: m.frame_id)
+    if attr(db, None, "HstpfE2EProfile") != PROFILE:
+        raise SystemExit(f"HstpfE2EProfile must be {PROFILE}: hstpf_e2e.c implements no other")
     ids = set()
     for m in msgs:
         check_e2e_layout(m)
@@ -61,8 +86,17 @@ def main():
             raise SystemExit(f"{m.name}: data ID {did:#06x} used twice")
         ids.add(did)
 
-    h = [HEADER, "#ifndef HSTPF_FRAMES_H\n#define HSTPF_FRAMES_H\n\n#include <stdint.h>\n\n"]
+    h = [HEADER, '#ifndef HSTPF_FRAMES_H\n#define HSTPF_FRAMES_H\n\n#include <stdint.h>\n\n#include "hstpf_e2e.h"\n\n']
     h.append('#ifdef __cplusplus\nextern "C" {\n#endif\n\n')
+    dflt = db.dbc.attribute_definitions
+    h.append(
+        "/* E2E parameters, from the DBC's attributes: the profile (HstpfE2EProfile)\n"
+        " * and the receiver defaults (BA_DEF_DEF_ of HstpfE2EMaxDeltaCounter and\n"
+        " * HstpfE2ETimeoutMs); each frame's own values are in hstpf_frames[]. */\n"
+        f'#define HSTPF_E2E_PROFILE "{PROFILE}"\n'
+        f"#define HSTPF_E2E_DEFAULT_MAX_DELTA {int(dflt['HstpfE2EMaxDeltaCounter'].default_value)}u\n"
+        f"#define HSTPF_E2E_DEFAULT_TIMEOUT_MS {int(dflt['HstpfE2ETimeoutMs'].default_value)}u\n\n"
+    )
     h.append(f"/** Number of frames in hstpf_frames[]. */\n#define HSTPF_FRAMES_COUNT {len(msgs)}u\n\n")
     for m in msgs:
         up = camel_to_snake_case(m.name).upper()
@@ -70,19 +104,35 @@ def main():
         h.append(f"#define HSTPF_FRAME_{up}_ID 0x{m.frame_id:03X}u\n")
         h.append(f"#define HSTPF_FRAME_{up}_DATA_ID 0x{m.dbc.attributes['HstpfE2EDataId'].value:04X}u\n")
         h.append(f"#define HSTPF_FRAME_{up}_LENGTH {m.length}u\n")
-        h.append(f"#define HSTPF_FRAME_{up}_CYCLE_MS {m.cycle_time or 0}u\n\n")
+        h.append(f"#define HSTPF_FRAME_{up}_CYCLE_MS {m.cycle_time or 0}u\n")
+        md, to = e2e_params(db, m)
+        h.append(f"#define HSTPF_FRAME_{up}_E2E_MAX_DELTA {md}u\n")
+        h.append(f"#define HSTPF_FRAME_{up}_E2E_TIMEOUT_MS {to}u\n\n")
+    fix = db.get_message_by_name("Position").get_signal_by_name("FixTime")
+    if fix.is_signed or fix.scale != 1 or fix.offset != 0 or fix.maximum != (1 << fix.length) - 1:
+        raise SystemExit("Position.FixTime must be an unsigned 1 ms counter over its whole bit width")
+    h.append(
+        "/** Position.FixTime wraps at this many ms: differences are taken modulo it. */\n"
+        f"#define HSTPF_FIX_TIME_WRAP_MS {1 << fix.length}u\n\n"
+    )
     h.append(
         "/** One frame of the DBC. */\ntypedef struct {\n"
         "    uint32_t can_id;   /**< 11-bit identifier */\n"
         "    uint16_t data_id;  /**< E2E data ID */\n"
         "    uint8_t length;    /**< bytes (DLC) */\n"
         "    uint16_t cycle_ms; /**< nominal cycle time */\n"
+        "    uint8_t e2e_max_delta;   /**< receiver: largest accepted counter step */\n"
+        "    uint16_t e2e_timeout_ms; /**< receiver: stale after this long */\n"
         "    const char *name;  /**< DBC message name */\n"
         "} hstpf_frame_info_t;\n\n"
         "/** All frames, by increasing can_id. */\n"
         "extern const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT];\n\n"
         "/** @brief The frame with this ID, or NULL (an unknown ID). O(frames). */\n"
         "const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);\n\n"
+        "/** @brief Fills an E2E receiver configuration for frame can_id with the\n"
+        " * DBC's data ID, length, max delta counter and timeout.\n"
+        " * @return 0, HSTPF_E2E_E_NULL, or HSTPF_E2E_E_ARG (an unknown ID). */\n"
+        "int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id);\n\n"
         "/*\n * Physical value -> raw signal value for the hstpf_can_*_t structs:\n"
         " * clamped to the DBC's [min, max], rounded half away from zero, NaN -> the\n"
         " * raw value nearest 0. Use these instead of cantools' *_encode(), which\n"
@@ -92,13 +142,20 @@ def main():
     c.append("const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {\n")
     for m in msgs:
         did = m.dbc.attributes["HstpfE2EDataId"].value
-        c.append(f'    {{0x{m.frame_id:03X}u, 0x{did:04X}u, {m.length}u, {m.cycle_time or 0}u, "{m.name}"}},\n')
+        md, to = e2e_params(db, m)
+        c.append(f'    {{0x{m.frame_id:03X}u, 0x{did:04X}u, {m.length}u, {m.cycle_time or 0}u, {md}u, {to}u, "{m.name}"}},\n')
     c.append("};\n\n")
     c.append(
         "const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)\n{\n"
         "    size_t i;\n\n    for (i = 0u; i < HSTPF_FRAMES_COUNT; i++) {\n"
         "        if (hstpf_frames[i].can_id == can_id) {\n            return &hstpf_frames[i];\n"
         "        }\n    }\n    return NULL;\n}\n\n"
+        "int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id)\n{\n"
+        "    const hstpf_frame_info_t *f = hstpf_frame_find(can_id);\n\n"
+        "    if (cfg == NULL) {\n        return HSTPF_E2E_E_NULL;\n    }\n"
+        "    if (f == NULL) {\n        return HSTPF_E2E_E_ARG;\n    }\n"
+        "    cfg->data_id = f->data_id;\n    cfg->length = f->length;\n"
+        "    cfg->max_delta = f->e2e_max_delta;\n    cfg->timeout_ms = f->e2e_timeout_ms;\n    return 0;\n}\n\n"
         "/* Clamp in the raw domain first, so the integer conversion is defined. */\n"
         "static double raw_sat(double phys, double scale, double offset, double lo, double hi)\n{\n"
         "    double x = (phys - offset) / scale;\n\n"

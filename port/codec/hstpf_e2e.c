@@ -1,6 +1,8 @@
 /* E2E Profile 1 style protection; the rules are in hstpf_e2e.h. */
 #include "hstpf_e2e.h"
 
+#include "hstpf_frames.h" /* the DBC's E2E defaults (HSTPF_E2E_DEFAULT_*) */
+
 #define CRC8_POLY 0x1Du
 #define COUNTER_CYCLE (HSTPF_E2E_COUNTER_MAX + 1u)
 
@@ -72,8 +74,8 @@ int32_t hstpf_e2e_rx_config_default(hstpf_e2e_rx_config_t *cfg, uint16_t data_id
     }
     cfg->data_id = data_id;
     cfg->length = length;
-    cfg->max_delta = 3u;
-    cfg->timeout_ms = 500u;
+    cfg->max_delta = (uint8_t)HSTPF_E2E_DEFAULT_MAX_DELTA;
+    cfg->timeout_ms = HSTPF_E2E_DEFAULT_TIMEOUT_MS;
     return 0;
 }
 

@@ -144,8 +144,11 @@ int32_t hstpf_e2e_tx_init(hstpf_e2e_tx_t *tx, uint16_t data_id);
 int32_t hstpf_e2e_protect(hstpf_e2e_tx_t *tx, uint8_t *frame, size_t len);
 
 /**
- * @brief Fills cfg with defaults: the given data ID and length, max_delta
- * 3, timeout_ms 500 (5 cycles of a 100 ms frame).
+ * @brief Fills cfg with defaults: the given data ID and length, and the
+ * DBC's default receiver parameters (BA_DEF_DEF_ of HstpfE2EMaxDeltaCounter
+ * and HstpfE2ETimeoutMs, generated into hstpf_frames.h: max_delta 3,
+ * timeout_ms 500, 5 cycles of a 100 ms frame). hstpf_frames_e2e_rx_config()
+ * gives a frame's own values.
  * @return 0 or HSTPF_E2E_E_NULL.
  */
 int32_t hstpf_e2e_rx_config_default(hstpf_e2e_rx_config_t *cfg, uint16_t data_id, uint8_t length);

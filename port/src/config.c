@@ -1,5 +1,10 @@
 /* hstpfd: configuration keys, file parser and command-line overrides. */
 #include "config.h"
+#include "hstpf_frames.h" /* the DBC's E2E receiver parameters of the inputs: the defaults below */
+
+#if HSTPF_FRAME_POSITION_E2E_MAX_DELTA != HSTPF_FRAME_TRACTION_E2E_MAX_DELTA
+#error "e2e_max_delta is one key for both inputs: the DBC gives them different HstpfE2EMaxDeltaCounter"
+#endif
 
 #include <errno.h>
 #include <math.h>
@@ -193,13 +198,13 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->gate_m = fc.gate_m;
     c->mass_t = 500.0;
     c->sched.step_period_s = 1.0;
-    c->sched.pos_timeout_s = 0.5;
-    c->sched.trac_timeout_s = 0.5;
+    c->sched.pos_timeout_s = HSTPF_FRAME_POSITION_E2E_TIMEOUT_MS / 1000.0;
+    c->sched.trac_timeout_s = HSTPF_FRAME_TRACTION_E2E_TIMEOUT_MS / 1000.0;
     c->sched.predict_period_s = 1.0;
     c->sched.max_gap_s = 600.0;
     c->sched.traction_mode = HSTPFD_TRACTION_MEAN;
     c->sched.stale_policy = HSTPFD_STALE_PREDICT;
-    c->e2e_max_delta = 3;
+    c->e2e_max_delta = HSTPF_FRAME_POSITION_E2E_MAX_DELTA;
     c->rx_filter = HSTPFD_RX_FILTER_BLOCK;
     c->time_scale = 1.0;
     c->tick_s = 0.1;

@@ -37,6 +37,8 @@ static const char *status_name(hstpf_status_t s)
         return "declared";
     case HSTPF_STATUS_CHANGED:
         return "changed";
+    case HSTPF_STATUS_WITHDRAWN:
+        return "withdrawn";
     default:
         return "undecided";
     }
@@ -112,7 +114,7 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
         return rc;
     }
     if (hstpfd_sched_init(&c->sched, &cfg->sched, on_step, c) != 0) {
-        return HSTPF_E_CONFIG;
+        return HSTPFD_E_SCHED;
     }
     if (hstpfd_rx_init(&c->rx, (uint8_t)cfg->e2e_max_delta, (uint32_t)(cfg->sched.pos_timeout_s * 1000.0 + 0.5),
                        (uint32_t)(cfg->sched.trac_timeout_s * 1000.0 + 0.5)) != 0) {
@@ -127,15 +129,17 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
                         : -2;
     }
     c->tick_us = (int64_t)(cfg->tick_s * 1e6 / cfg->time_scale + 0.5);
-    if (c->tick_us < 1) {
-        c->tick_us = 1;
+    if (c->tick_us < 1000) {
+        c->tick_us = 1000; /* 1 ms of source time: the poll timeout's resolution */
     }
     c->declared_prev = -1;
     (void)hstpf_estimate(filt, &c->est);
     if (out != NULL && cfg->out_format == HSTPFD_OUT_CSV) {
         static const char *const pre[2] = {"q_", "ess_"};
         int w;
-        fputs("t,k,dt,u,y,err,pos,speed,c0,c1,c2,best,declared,status,pos_stale,trac_stale,restart", out);
+        fputs("t,k,dt,u,y,err,valid,pos,speed,pos_sd,speed_sd,standstill,acquisitions,c0,c1,c2,best,declared,status,"
+              "pos_stale,trac_stale,restart",
+              out);
         for (w = 0; w < 2; ++w) {
             for (l = 0; l < cfg->n_models; ++l) {
                 char col[HSTPFD_NAME_MAX + 8];
@@ -151,6 +155,43 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
 
 /* ---- outputs ----------------------------------------------------------- */
 
+
+/* The library fills position_sd_m / speed_sd_mps (with its lock API). */
+#define LIB_HAS_SD HSTPFD_LIB_LOCK_API
+
+static int lib_valid(const hstpf_estimate_t *e)
+{
+#if HSTPFD_LIB_LOCK_API
+    return e->valid != 0;
+#else
+    (void)e;
+    return 1;
+#endif
+}
+
+/* Every number published as valid is finite and within the library's
+ * documented ranges, and the filter has lock (docs/daemon.md, "Validity"). */
+static int est_valid(const hstpfd_core_t *c)
+{
+    const hstpf_estimate_t *e = &c->est;
+    uint16_t l;
+    if (!c->have_fix || !lib_valid(e) || !isfinite(e->position_m) || fabs(e->position_m) > HSTPF_POS_MAX_M ||
+        !isfinite((double)e->speed_mps) || !isfinite(e->position_sd_m) || !isfinite((double)e->speed_sd_mps)) {
+        return 0;
+    }
+    for (l = 0; l < 3; ++l) {
+        if (!isfinite((double)e->theta[l])) {
+            return 0;
+        }
+    }
+    for (l = 0; l < e->n_models; ++l) {
+        if (!isfinite((double)e->model[l].q)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
 {
     const hstpf_estimate_t *e = &c->est;
@@ -158,13 +199,35 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     const hstpf_e2e_counts_t *t = hstpf_e2e_rx_counts(&c->rx.trac);
     memset(v, 0, sizeof *v);
     v->have_fix = c->have_fix;
+    v->valid = (uint8_t)est_valid(c);
     v->position_m = e->position_m;
     v->speed_mps = (double)e->speed_mps;
+    v->position_sd_m = e->position_sd_m;
+    v->speed_sd_mps = (double)e->speed_sd_mps;
+    v->sd_valid = (uint8_t)LIB_HAS_SD;
+    v->standstill = e->standstill;
+    v->acquisitions = e->acquisitions;
+    if (c->sched.have_fix && c->have_est_t) {
+        /* the step's end on the fix clock: the inverse of the fix clock's mapping */
+        const int64_t ms = (c->est_t_us - c->sched.fix_off) / 1000;
+        const int64_t w = (int64_t)HSTPFD_FIX_WRAP_MS;
+        v->est_time_valid = 1;
+        v->est_time_ms = (uint16_t)(((ms % w) + w) % w);
+    }
     v->status = e->status;
-    v->declared_row = e->declared >= 0 ? c->row[e->declared] : -1;
-    v->declared_q = e->declared >= 0 ? (double)e->model[e->declared].q : 0.0;
-    v->leader_row = c->have_fix ? c->row[e->best] : -1;
-    v->leader_q = c->have_fix ? (double)e->model[e->best].q : 0.0;
+    /* a weight that is not finite names no type */
+    if (e->declared >= 0 && e->declared < (int)e->n_models && isfinite((double)e->model[e->declared].q)) {
+        v->declared_row = c->row[e->declared];
+        v->declared_q = (double)e->model[e->declared].q;
+    } else {
+        v->declared_row = -1;
+    }
+    if (c->have_fix && e->best >= 0 && e->best < (int)e->n_models && isfinite((double)e->model[e->best].q)) {
+        v->leader_row = c->row[e->best];
+        v->leader_q = (double)e->model[e->best].q;
+    } else {
+        v->leader_row = -1;
+    }
     v->theta[0] = (double)e->theta[0];
     v->theta[1] = (double)e->theta[1];
     v->theta[2] = (double)e->theta[2];
@@ -178,6 +241,10 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->unknown_id = c->n.unknown;
     v->error_frames = c->n.error;
     v->degeneracy = c->n.degeneracy;
+    v->clock_fwd = c->sched.n.clock_fwd;
+    v->clock_back = c->sched.n.clock_back;
+    v->late = c->sched.n.late;
+    v->reacquire = c->n.reacquire;
 }
 
 static void transmit(hstpfd_core_t *c, unsigned i)
@@ -216,6 +283,9 @@ static void tx_service(hstpfd_core_t *c)
     unsigned i;
     for (i = 1; i < HSTPFD_N_OUTPUTS; ++i) {
         const int64_t cyc = hstpfd_tx_cycle_us(i);
+        if (i == HSTPFD_OUT_QUALITY) {
+            continue; /* goes with the state */
+        }
         if (c->t_now >= c->next_tx[i]) {
             transmit(c, i);
             c->next_tx[i] += cyc;
@@ -226,69 +296,117 @@ static void tx_service(hstpfd_core_t *c)
     }
 }
 
+/* A number of the step stream: %.*g, or, if it is not finite, JSON null /
+ * an empty CSV cell (the line's valid field is then 0). */
+static void out_num(FILE *fp, int csv, double x, int prec)
+{
+    if (isfinite(x)) {
+        fprintf(fp, "%.*g", prec, x);
+    } else if (!csv) {
+        fputs("null", fp);
+    }
+}
+
+/* The separator before a field: "," in CSV, ,"key": in JSON. */
+static void out_key(FILE *fp, int csv, const char *key)
+{
+    if (csv) {
+        fputc(',', fp);
+    } else {
+        fprintf(fp, ",\"%s\":", key);
+    }
+}
+
 static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 {
     const hstpf_estimate_t *e = &c->est;
     const hstpfd_config_t *cfg = c->cfg;
     FILE *fp = c->out;
+    const int csv = cfg->out_format == HSTPFD_OUT_CSV;
+    const int valid = est_valid(c);
     uint16_t l;
-    const char *best = c->have_fix ? cfg->models[e->best].name : NULL;
-    const char *decl = e->declared >= 0 ? cfg->models[e->declared].name : NULL;
+    const char *best = c->have_fix && e->best >= 0 && e->best < (int)cfg->n_models ? cfg->models[e->best].name : NULL;
+    const char *decl = e->declared >= 0 && e->declared < (int)cfg->n_models ? cfg->models[e->declared].name : NULL;
     if (fp == NULL) {
         return;
     }
-    if (cfg->out_format == HSTPFD_OUT_CSV) {
+    if (csv) {
         json_time(fp, st->t_us);
-        fprintf(fp, ",%lu,%.9g,%.9g,", (unsigned long)c->sched.n.steps, st->in.dt_s, st->in.traction);
-        if (st->in.has_position) {
-            fprintf(fp, "%.9g", st->in.position_m);
+        fprintf(fp, ",%lu", (unsigned long)c->sched.n.steps);
+    } else {
+        fputs("{\"t\":", fp);
+        json_time(fp, st->t_us);
+        fprintf(fp, ",\"k\":%lu", (unsigned long)c->sched.n.steps);
+    }
+    out_key(fp, csv, "dt");
+    out_num(fp, csv, st->in.dt_s, 9);
+    out_key(fp, csv, "u");
+    out_num(fp, csv, st->in.traction, 9);
+    out_key(fp, csv, "y");
+    out_num(fp, csv, st->in.has_position ? st->in.position_m : HUGE_VAL, 9);
+    out_key(fp, csv, "err");
+    if (rc != HSTPF_OK) {
+        if (csv) {
+            fputs(hstpfd_err_name(rc), fp);
+        } else {
+            json_str(fp, hstpfd_err_name(rc));
         }
-        fprintf(fp, ",%s,%.9g,%.9g,%.9g,%.9g,%.9g,", rc == HSTPF_OK ? "" : hstpfd_err_name(rc), e->position_m,
-                (double)e->speed_mps, (double)e->theta[0], (double)e->theta[1], (double)e->theta[2]);
+    } else if (!csv) {
+        fputs("null", fp);
+    }
+    if (csv) {
+        fprintf(fp, ",%d", valid ? 1 : 0);
+    } else {
+        fprintf(fp, ",\"valid\":%s", valid ? "true" : "false");
+    }
+    out_key(fp, csv, "pos");
+    out_num(fp, csv, e->position_m, 9);
+    out_key(fp, csv, "speed");
+    out_num(fp, csv, (double)e->speed_mps, 9);
+    out_key(fp, csv, "pos_sd"); /* null until the library provides it */
+    out_num(fp, csv, LIB_HAS_SD ? e->position_sd_m : HUGE_VAL, 6);
+    out_key(fp, csv, "speed_sd");
+    out_num(fp, csv, LIB_HAS_SD ? (double)e->speed_sd_mps : HUGE_VAL, 6);
+    out_key(fp, csv, "standstill");
+    fprintf(fp, "%u", (unsigned)e->standstill);
+    out_key(fp, csv, "acquisitions");
+    fprintf(fp, "%lu", (unsigned long)e->acquisitions);
+    if (csv) {
+        for (l = 0; l < 3; ++l) {
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->theta[l], 9);
+        }
+        fputc(',', fp);
         csv_str(fp, best != NULL ? best : "");
         fputc(',', fp);
         csv_str(fp, decl != NULL ? decl : "");
         fprintf(fp, ",%s,%u,%u,%u", status_name(e->status), (unsigned)st->pos_stale, (unsigned)st->trac_stale,
                 (unsigned)st->restart);
         for (l = 0; l < e->n_models; ++l) {
-            fprintf(fp, ",%.9g", (double)e->model[l].q);
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->model[l].q, 9);
         }
         for (l = 0; l < e->n_models; ++l) {
-            fprintf(fp, ",%.6g", (double)e->model[l].ess);
+            fputc(',', fp);
+            out_num(fp, 1, (double)e->model[l].ess, 6);
         }
         fputc('\n', fp);
         return;
     }
-    fputs("{\"t\":", fp);
-    json_time(fp, st->t_us);
-    fprintf(fp, ",\"k\":%lu,\"dt\":", (unsigned long)c->sched.n.steps);
-    json_num(fp, st->in.dt_s);
-    fputs(",\"u\":", fp);
-    json_num(fp, st->in.traction);
-    fputs(",\"y\":", fp);
-    if (st->in.has_position) {
-        json_num(fp, st->in.position_m);
-    } else {
-        fputs("null", fp);
+    fputs(",\"theta\":[", fp);
+    for (l = 0; l < 3; ++l) {
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->theta[l], 9);
     }
-    fputs(",\"err\":", fp);
-    if (rc == HSTPF_OK) {
-        fputs("null", fp);
-    } else {
-        json_str(fp, hstpfd_err_name(rc));
-    }
-    fputs(",\"pos\":", fp);
-    json_num(fp, e->position_m);
-    fputs(",\"speed\":", fp);
-    json_num(fp, (double)e->speed_mps);
-    fprintf(fp, ",\"theta\":[%.9g,%.9g,%.9g],\"q\":[", (double)e->theta[0], (double)e->theta[1],
-            (double)e->theta[2]);
+    fputs("],\"q\":[", fp);
     for (l = 0; l < e->n_models; ++l) {
-        fprintf(fp, "%s%.9g", l ? "," : "", (double)e->model[l].q);
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->model[l].q, 9);
     }
     fputs("],\"ess\":[", fp);
     for (l = 0; l < e->n_models; ++l) {
-        fprintf(fp, "%s%.6g", l ? "," : "", (double)e->model[l].ess);
+        fputs(l ? "," : "", fp);
+        out_num(fp, 0, (double)e->model[l].ess, 6);
     }
     fputs("],\"best\":", fp);
     if (best != NULL) {
@@ -308,6 +426,22 @@ static void write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 
 /* ---- steps --------------------------------------------------------------- */
 
+/* Drops the lock: after a gap beyond max_gap_s or a clock step the filter
+ * starts again from the next fix (hstpf_reacquire keeps the model weights;
+ * without the library's lock API, hstpf_reset starts from scratch). */
+static void reacquire(hstpfd_core_t *c)
+{
+#if HSTPFD_LIB_LOCK_API
+    (void)hstpf_reacquire(c->filt);
+#else
+    (void)hstpf_reset(c->filt);
+    c->declared_prev = -1;
+    memset(c->floor_prev, 0, sizeof c->floor_prev);
+#endif
+    c->have_fix = 0;
+    ++c->n.reacquire;
+}
+
 static void on_step(void *ctx, const hstpfd_step_t *st)
 {
     hstpfd_core_t *c = (hstpfd_core_t *)ctx;
@@ -315,10 +449,7 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
     uint16_t l;
     int degenerate = 0;
     if (st->restart) {
-        (void)hstpf_reset(c->filt);
-        c->have_fix = 0;
-        c->declared_prev = -1;
-        memset(c->floor_prev, 0, sizeof c->floor_prev);
+        reacquire(c);
     }
     rc = hstpf_step(c->filt, &st->in);
     if (rc == HSTPF_OK) {
@@ -350,13 +481,26 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
         c->have_decision = c->est.declared >= 0;
         c->decision_t = st->t_us;
     }
+    hstpfd_core_publish(c, st, rc);
+}
+
+void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
+{
+    c->est_t_us = st->t_us;
+    c->have_est_t = 1;
     write_step(c, st, rc);
     /* the estimated state goes out after a step, at most once per cycle */
     if (!c->state_sent || c->t_now - c->last_state_tx >= hstpfd_tx_cycle_us(0) - hstpfd_tx_cycle_us(0) / 50) {
         c->state_sent = 1;
         c->last_state_tx = c->t_now;
         transmit(c, 0);
+        transmit(c, HSTPFD_OUT_QUALITY);
     }
+}
+
+void hstpfd_core_send(hstpfd_core_t *c, unsigned i)
+{
+    transmit(c, i);
 }
 
 /* ---- time and frames --------------------------------------------------- */
@@ -369,9 +513,30 @@ static int64_t frame_time(const hstpfd_core_t *c, int64_t src)
     return c->src0 + (int64_t)floor((double)(src - c->src0) * c->cfg->time_scale + 0.5);
 }
 
+/* A source stamp this far behind the latest time is a step of its clock. */
+#define CLOCK_BACK_US INT64_C(1000000)
+
+/* Source time -> the daemon's timeline, which never goes back and never
+ * jumps ahead by more than max_gap_s + 1 s (docs/daemon.md, "Time"): a stamp
+ * more than 1 s behind the latest, or more than max_gap_s ahead of it, is a
+ * clock step; the timeline carries on from the latest time (back) or
+ * advances by max_gap_s + 1 s only (forward), the step is counted and the
+ * estimator re-acquires at the next fix. */
 static void set_time(hstpfd_core_t *c, int64_t src)
 {
-    const int64_t t = frame_time(c, src);
+    int64_t t = frame_time(c, src) + c->base;
+    if (t < c->t_now - CLOCK_BACK_US) {
+        c->base += c->t_now - t;
+        c->last_src = src;
+        c->src_now = src;
+        t = c->t_now;
+        hstpfd_sched_clock_step(&c->sched, t, -1);
+    } else if (t > c->t_now + c->sched.gap_us) {
+        const int64_t t2 = c->t_now + c->sched.gap_us + CLOCK_BACK_US;
+        c->base -= t - t2;
+        t = c->t_now = t2;
+        hstpfd_sched_clock_step(&c->sched, t, 1);
+    }
     if (t > c->t_now) {
         c->t_now = t;
     }
@@ -406,10 +571,25 @@ void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us)
     if (!c->have_time) {
         return;
     }
+    if (frame_time(c, t_src_us) + c->base - c->t_now > c->sched.gap_us) {
+        /* a forward step of the clock: one tick, none across it */
+        c->last_src = t_src_us;
+        tick(c, t_src_us);
+        return;
+    }
     while (c->last_src + c->tick_us <= t_src_us) {
+        if (c->stop != NULL && *c->stop) {
+            return;
+        }
         c->last_src += c->tick_us;
         tick(c, c->last_src);
     }
+}
+
+void hstpfd_core_set_stop(hstpfd_core_t *c, const volatile sig_atomic_t *stop)
+{
+    c->stop = stop;
+    hstpfd_sched_set_stop(&c->sched, stop);
 }
 
 int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us)
@@ -448,10 +628,20 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
     now_ms = (uint32_t)(c->t_now / 1000);
     hstpfd_rx_decode(&c->rx, f, now_ms, &r);
     switch (r.kind) {
-    case HSTPFD_RX_POSITION:
+    case HSTPFD_RX_POSITION: {
+        /* consecutive fixes: the previous accepted position frame was a fix and
+         * the alive counter moved on by 1..max_delta since (also across a
+         * stale gap: a receive clock step leaves the counter in sequence) */
+        const unsigned d_cnt = (r.counter + 15u - c->pos_last_counter) % 15u;
+        const int in_seq = c->pos_prev_fix && r.accepted && d_cnt >= 1u && d_cnt <= c->cfg->e2e_max_delta;
         ++c->n.position;
+        if (r.accepted || r.e2e == HSTPF_E2E_COUNTER_JUMP) {
+            c->pos_prev_fix = r.valid;
+            c->pos_last_counter = r.counter;
+        }
         if (r.valid) {
-            hstpfd_sched_position(&c->sched, c->t_now, r.value);
+            hstpfd_sched_position_at(&c->sched, c->t_now, r.value,
+                                     r.has_fix_time ? (int32_t)r.fix_time_ms : HSTPFD_NO_FIX_TIME, in_seq);
         } else {
             if (r.accepted) {
                 ++c->n.pos_invalid;
@@ -459,6 +649,7 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
             hstpfd_sched_time(&c->sched, c->t_now);
         }
         break;
+    }
     case HSTPFD_RX_TRACTION:
         ++c->n.traction;
         if (r.valid && fabs(hstpfd_traction_unit(r.value, c->cfg->mass_t)) > HSTPF_U_MAX) {
@@ -566,23 +757,34 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
         fputs("null", fp);
     }
     fputs(",\"leader\":", fp);
-    if (c->have_fix) {
+    if (c->have_fix && e->best >= 0 && e->best < (int)cfg->n_models) {
         json_str(fp, cfg->models[e->best].name);
     } else {
         fputs("null", fp);
     }
-    fprintf(fp, ",\"theta\":[%.9g,%.9g,%.9g],\"position_m\":", (double)e->theta[0], (double)e->theta[1],
-            (double)e->theta[2]);
+    fputs(",\"theta\":[", fp);
+    for (i = 0; i < 3; ++i) {
+        fputs(i ? "," : "", fp);
+        out_num(fp, 0, (double)e->theta[i], 9);
+    }
+    fprintf(fp, "],\"valid\":%s,\"position_m\":", est_valid(c) ? "true" : "false");
     json_num(fp, e->position_m);
     fputs(",\"speed_mps\":", fp);
     json_num(fp, (double)e->speed_mps);
+    fputs(",\"position_sd_m\":", fp);
+    json_num(fp, LIB_HAS_SD ? e->position_sd_m : HUGE_VAL);
+    fputs(",\"speed_sd_mps\":", fp);
+    json_num(fp, LIB_HAS_SD ? (double)e->speed_sd_mps : HUGE_VAL);
+    fprintf(fp, ",\"standstill\":%u,\"acquisitions\":%lu,\"nonfinite_resets\":%lu", (unsigned)e->standstill,
+            (unsigned long)e->acquisitions, (unsigned long)e->nonfinite_resets);
     fputs(",\"weights\":{", fp);
     for (l = 0; l < e->n_models; ++l) {
         if (l) {
             fputc(',', fp);
         }
         json_str(fp, cfg->models[l].name);
-        fprintf(fp, ":%.9g", (double)e->model[l].q);
+        fputc(':', fp);
+        out_num(fp, 0, (double)e->model[l].q, 9);
     }
     fputs("},\"faults\":{", fp);
     kv(fp, "bad_crc", (unsigned long)(p->bad_crc + t->bad_crc), 1);
@@ -601,6 +803,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "error_frames", (unsigned long)c->n.error, 0);
     kv(fp, "late_position", (unsigned long)s->late, 0);
     kv(fp, "time_backwards", (unsigned long)s->time_backwards, 0);
+    kv(fp, "clock_steps_forward", (unsigned long)s->clock_fwd, 0);
+    kv(fp, "clock_steps_back", (unsigned long)s->clock_back, 0);
     kv(fp, "bad_lines", (unsigned long)c->n.bad_lines, 0);
     fputs("},\"e2e\":{\"position\":{", fp);
     kv(fp, "ok", (unsigned long)p->ok, 1);
@@ -639,6 +843,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     fputs("},\"scheduler\":{", fp);
     kv(fp, "decimated", (unsigned long)s->decimated, 1);
     kv(fp, "split", (unsigned long)s->split, 0);
+    kv(fp, "fix_dated", (unsigned long)s->fix_dated, 0);
+    kv(fp, "reacquire", (unsigned long)c->n.reacquire, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);
     fputs("},\"io\":{", fp);

@@ -6,12 +6,22 @@
 #ifndef HSTPFD_CORE_H
 #define HSTPFD_CORE_H
 
+#include <signal.h>
 #include <stdio.h>
 
 #include "config.h"
 #include "frame.h"
 #include "frames.h"
 #include "sched.h"
+
+/* The library's lock and validity (hstpf_estimate_t.valid, the sd fields)
+ * and hstpf_reacquire() are used once the library implements them (the API
+ * is in the header and implemented: 1). With 0 (a library without them)
+ * the daemon takes "has a fix" for the lock, publishes no sd (null, and
+ * QualValid 0) and restarts with hstpf_reset(). */
+#ifndef HSTPFD_LIB_LOCK_API
+#define HSTPFD_LIB_LOCK_API 1
+#endif
 
 /* Sends one frame; returns 0, HSTPFD_SEND_OFFLINE if there is no open
  * interface (counted apart), or another value < 0 if sending failed. */
@@ -25,6 +35,7 @@ typedef struct {
     uint32_t err_class[HSTPFD_ERR_N_CLASSES];
     uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
     uint32_t degeneracy;
+    uint32_t reacquire; /* restarts of the filter (gap or clock step) */
     uint32_t tx_frames, tx_errors, tx_offline, tx_skipped;
     /* filled by the I/O layer */
     uint32_t reopens, bad_lines, read_errors;
@@ -45,6 +56,8 @@ typedef struct {
     /* time, microseconds; frame time = src0 + (source stamp - src0) x time_scale */
     uint8_t have_time;
     int64_t src0, t_first, t_now, last_src, tick_us;
+    int64_t base; /* timeline = frame time + base (clock steps taken out) */
+    const volatile sig_atomic_t *stop; /* loops end when set (may be NULL) */
     int64_t src_now; /* latest source time seen (stamps of --frames-out) */
     int64_t next_tx[HSTPFD_N_OUTPUTS];
     uint8_t state_sent;
@@ -52,9 +65,13 @@ typedef struct {
     /* estimate */
     hstpf_estimate_t est;
     uint8_t have_fix;      /* the estimator has a fix now */
+    uint8_t pos_prev_fix;  /* the last position frame in sequence was a valid fix */
+    uint8_t pos_last_counter; /* its alive counter */
     uint8_t had_fix;       /* t_first_fix is set */
     uint8_t have_decision; /* decision_t is set */
     int64_t t_first_fix;
+    uint8_t have_est_t;    /* est_t_us is set */
+    int64_t est_t_us;      /* timeline time of the published estimate (its step's end) */
     int16_t declared_prev;
     int64_t decision_t;    /* frame time of the step that declared the current type */
     uint32_t floor_prev[HSTPF_MAX_MODELS];
@@ -64,12 +81,17 @@ typedef struct {
 /* Initialises the core and the estimator *filt (caller-owned, static).
  * send may be NULL (no bus); out and frames_out may be NULL. bus names the
  * interface in frames_out lines. Returns 0, or an HSTPF_E_* code from
- * hstpf_init, or -100 for a receiver configuration error. */
+ * hstpf_init, or -100 for a receiver configuration error, or HSTPFD_E_SCHED
+ * for a scheduler configuration error (a period or timeout below 1 us). */
+#define HSTPFD_E_SCHED (-101)
 int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt, hstpfd_send_fn send,
                      void *send_ctx, FILE *out, FILE *frames_out, const char *bus);
 
 /* One received frame (t_us: the source's timestamp). */
 void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f);
+
+/* Every loop of the core and the scheduler ends when *stop is set. */
+void hstpfd_core_set_stop(hstpfd_core_t *c, const volatile sig_atomic_t *stop);
 
 /* No frame has arrived up to the source time t_us: idle ticks up to it. */
 void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us);
@@ -77,6 +99,14 @@ void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us);
 /* Microseconds of source time until the next idle tick is due (for a poll
  * timeout), or -1 before the first frame. */
 int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us);
+
+/* Publishes the estimate in c->est after a step (rc: the step's result):
+ * the step stream line and the state frame. Called by the step handler;
+ * public so that tests can publish a crafted estimate. */
+void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc);
+
+/* Sends output frame i (0..HSTPFD_N_OUTPUTS-1) now, from c->est. */
+void hstpfd_core_send(hstpfd_core_t *c, unsigned i);
 
 /* Writes the summary as one JSON line (with newline). source_kind is "log"
  * or "iface", source the file or interface, end why the run ended. */

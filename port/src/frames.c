@@ -7,16 +7,20 @@
 #include "hstpf_can.h"
 #include "hstpf_frames.h"
 
+#if HSTPF_FIX_TIME_WRAP_MS != HSTPFD_FIX_WRAP_MS
+#error "frames.h: HSTPFD_FIX_WRAP_MS differs from the DBC's FixTime width"
+#endif
+
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms)
 {
     hstpf_e2e_rx_config_t c;
-    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_POSITION_DATA_ID, HSTPF_FRAME_POSITION_LENGTH);
+    (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_POSITION_ID);
     c.max_delta = max_delta;
     c.timeout_ms = pos_timeout_ms;
     if (hstpf_e2e_rx_init(&st->pos, &c) != 0) {
         return -1;
     }
-    (void)hstpf_e2e_rx_config_default(&c, HSTPF_FRAME_TRACTION_DATA_ID, HSTPF_FRAME_TRACTION_LENGTH);
+    (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_TRACTION_ID);
     c.max_delta = max_delta;
     c.timeout_ms = trac_timeout_ms;
     return hstpf_e2e_rx_init(&st->trac, &c) == 0 ? 0 : -1;
@@ -53,7 +57,10 @@ void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t n
         out->accepted = (uint8_t)(hstpf_e2e_accepted(out->e2e) != 0);
         if (out->accepted && hstpf_can_position_unpack(&m, f->data, f->len) == 0) {
             out->value = hstpf_can_position_position_decode(m.position);
+            out->counter = m.e2e_counter;
             out->valid = (uint8_t)(m.pos_valid == HSTPF_CAN_POSITION_POS_VALID_VALID_CHOICE);
+            out->has_fix_time = (uint8_t)(m.fix_time_valid == HSTPF_CAN_POSITION_FIX_TIME_VALID_PRESENT_CHOICE);
+            out->fix_time_ms = (uint16_t)(m.fix_time % HSTPF_FIX_TIME_WRAP_MS);
         }
         return;
     }
@@ -77,15 +84,18 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
     (void)hstpf_e2e_rx_poll(&st->trac, now_ms);
 }
 
-static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID, HSTPF_FRAME_EST_TYPE_ID,
-                                                  HSTPF_FRAME_EST_THETA_ID, HSTPF_FRAME_HEALTH_RX_ID,
-                                                  HSTPF_FRAME_HEALTH_SYS_ID};
+static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID,  HSTPF_FRAME_EST_TYPE_ID,
+                                                  HSTPF_FRAME_EST_THETA_ID,  HSTPF_FRAME_HEALTH_RX_ID,
+                                                  HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID,
+                                                  HSTPF_FRAME_EST_QUALITY_ID};
 static const uint16_t out_data_id[HSTPFD_N_OUTPUTS] = {
-    HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID, HSTPF_FRAME_EST_THETA_DATA_ID,
-    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID};
+    HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID,   HSTPF_FRAME_EST_THETA_DATA_ID,
+    HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID, HSTPF_FRAME_HEALTH_TIME_DATA_ID,
+    HSTPF_FRAME_EST_QUALITY_DATA_ID};
 static const uint32_t out_cycle_ms[HSTPFD_N_OUTPUTS] = {
-    HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS, HSTPF_FRAME_EST_THETA_CYCLE_MS,
-    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS};
+    HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS,   HSTPF_FRAME_EST_THETA_CYCLE_MS,
+    HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS, HSTPF_FRAME_HEALTH_TIME_CYCLE_MS,
+    HSTPF_FRAME_EST_QUALITY_CYCLE_MS};
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st)
 {
@@ -132,8 +142,12 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
     switch (i) {
     case 0: {
         struct hstpf_can_est_state_t m;
+        /* NaN fails the range test too: it is sent as 0, never as valid */
+        const int ok = hstpf_can_est_state_est_position_is_in_phys_range(v->position_m) &&
+                       hstpf_can_est_state_est_speed_is_in_phys_range(v->speed_mps);
         (void)hstpf_can_est_state_init(&m);
-        m.est_valid = v->have_fix ? 1u : 0u;
+        m.est_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.est_fault = (uint8_t)(v->have_fix && !ok);
         m.est_position = hstpf_frames_est_state_est_position_raw(v->have_fix ? v->position_m : 0.0);
         m.est_speed = hstpf_frames_est_state_est_speed_raw(v->have_fix ? v->speed_mps : 0.0);
         n = hstpf_can_est_state_pack(f->data, &m, 8u);
@@ -152,12 +166,12 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
     }
     case 2: {
         struct hstpf_can_est_theta_t m;
-        /* the signal ranges: c0 [0, 65.535], c1 [0, 0.065535], c2 [0, 0.0013107] */
-        const int sat = v->theta[0] < 0.0 || v->theta[0] > 65.535 || v->theta[1] < 0.0 || v->theta[1] > 0.065535 ||
-                        v->theta[2] < 0.0 || v->theta[2] > 0.0013107;
+        const int ok = hstpf_can_est_theta_c0_is_in_phys_range(v->theta[0]) &&
+                       hstpf_can_est_theta_c1_is_in_phys_range(v->theta[1]) &&
+                       hstpf_can_est_theta_c2_is_in_phys_range(v->theta[2]);
         (void)hstpf_can_est_theta_init(&m);
-        m.theta_valid = v->have_fix ? 1u : 0u;
-        m.theta_saturated = (uint8_t)(v->have_fix && sat);
+        m.theta_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.theta_saturated = (uint8_t)(v->have_fix && !ok);
         m.c0 = hstpf_frames_est_theta_c0_raw(v->theta[0]);
         m.c1 = hstpf_frames_est_theta_c1_raw(v->theta[1]);
         m.c2 = hstpf_frames_est_theta_c2_raw(v->theta[2]);
@@ -174,6 +188,32 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(count(v->jump));
         m.wrong_length = hstpf_frames_health_rx_wrong_length_raw(count(v->wrong_length));
         n = hstpf_can_health_rx_pack(f->data, &m, 8u);
+        break;
+    }
+    case HSTPFD_OUT_QUALITY: {
+        struct hstpf_can_est_quality_t m;
+        const int ok = hstpf_can_est_quality_position_sd_is_in_phys_range(v->position_sd_m) &&
+                       hstpf_can_est_quality_speed_sd_is_in_phys_range(v->speed_sd_mps);
+        (void)hstpf_can_est_quality_init(&m);
+        m.qual_valid = (uint8_t)(v->have_fix && v->valid && v->sd_valid && ok);
+        m.qual_fault = (uint8_t)(v->have_fix && !ok);
+        m.standstill = v->standstill ? 1u : 0u;
+        m.position_sd = hstpf_frames_est_quality_position_sd_raw(v->have_fix ? v->position_sd_m : 0.0);
+        m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(v->have_fix ? v->speed_sd_mps : 0.0);
+        m.est_time_valid = v->est_time_valid ? 1u : 0u;
+        m.est_time = (uint16_t)(v->est_time_valid ? v->est_time_ms % HSTPF_FIX_TIME_WRAP_MS : 0u);
+        n = hstpf_can_est_quality_pack(f->data, &m, 8u);
+        break;
+    }
+    case 5: {
+        struct hstpf_can_health_time_t m;
+        (void)hstpf_can_health_time_init(&m);
+        m.clock_steps_fwd = hstpf_frames_health_time_clock_steps_fwd_raw(count(v->clock_fwd));
+        m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(count(v->clock_back));
+        m.late_positions = hstpf_frames_health_time_late_positions_raw(count(v->late));
+        m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(count(v->reacquire));
+        m.acquisitions = hstpf_frames_health_time_acquisitions_raw(count(v->acquisitions));
+        n = hstpf_can_health_time_pack(f->data, &m, 8u);
         break;
     }
     default: {

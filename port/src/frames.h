@@ -28,12 +28,19 @@ typedef struct {
     uint8_t accepted;       /* inputs: E2E accepted */
     uint8_t valid;          /* inputs: accepted and the sender's valid flag set */
     double value;           /* position m, or total traction force kN */
+    uint8_t counter;        /* inputs: the E2E alive counter (when accepted) */
+    uint8_t has_fix_time;   /* position: the sender dated the fix (FixTimeValid) */
+    uint16_t fix_time_ms;   /* position: fix time, ms modulo HSTPFD_FIX_WRAP_MS */
 } hstpfd_rx_t;
+
+/* The position frame's fix time wraps at this many ms. */
+#define HSTPFD_FIX_WRAP_MS 8192
 
 /* Receiver state: one E2E checker per input stream. */
 typedef struct {
     hstpf_e2e_rx_t pos, trac;
 } hstpfd_rx_state_t;
+
 
 /* Returns 0, or -1 if a value is out of the checker's range. */
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms);
@@ -46,11 +53,21 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms);
 #define HSTPFD_N_INPUTS 2
 uint32_t hstpfd_input_id(unsigned i);
 
-/* Everything the output frames carry. */
+/* Everything the output frames carry. Validity rule (docs/can.md): a value
+ * goes out marked valid only when `valid` is set and the value is finite and
+ * within its signal's range; otherwise its frame's valid bit is 0 and, if
+ * the estimator has a fix, its fault/saturation bit is 1. */
 typedef struct {
     uint8_t have_fix;         /* the estimator has had its first fix */
+    uint8_t valid;            /* the estimate is valid (core.c: est_valid) */
     double position_m;
     double speed_mps;
+    double position_sd_m, speed_sd_mps; /* blended posterior sd */
+    uint8_t sd_valid;                   /* the estimator provides them */
+    uint8_t standstill;
+    uint32_t acquisitions;
+    uint8_t est_time_valid;   /* est_time_ms is known */
+    uint16_t est_time_ms;     /* the estimate's time on the fix clock, ms modulo the wrap */
     hstpf_status_t status;
     int declared_row;         /* Table 1 row, -2 custom, -1 none */
     double declared_q;
@@ -60,17 +77,20 @@ typedef struct {
     uint8_t pos_stale, trac_stale;
     uint32_t bad_crc, repeated, jump, wrong_length; /* summed over the inputs */
     uint32_t stale_events, unknown_id, error_frames, degeneracy;
+    uint32_t clock_fwd, clock_back, late, reacquire;
 } hstpfd_tx_values_t;
 
 /* Sender state: one E2E counter per output frame. */
-#define HSTPFD_N_OUTPUTS 5
+#define HSTPFD_N_OUTPUTS 7
+#define HSTPFD_OUT_QUALITY 6 /* EstQuality: sent with the state (output 0), not periodic */
 typedef struct {
     hstpf_e2e_tx_t e2e[HSTPFD_N_OUTPUTS];
 } hstpfd_tx_state_t;
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st);
-/* Cycle of output i, microseconds; its ID. Output 0 is the estimated state
- * (sent after a step, at most once per cycle), the others are periodic. */
+/* Cycle of output i, microseconds; its ID. Outputs 0 (the estimated state)
+ * and HSTPFD_OUT_QUALITY (its uncertainty) are sent after a step, at most
+ * once per cycle; the others are periodic. */
 int64_t hstpfd_tx_cycle_us(unsigned i);
 uint32_t hstpfd_tx_id(unsigned i);
 /* Packs and E2E-protects output i into f (t_us not set). Returns 0 or -1. */

@@ -217,10 +217,15 @@ int main(int argc, char **argv)
                           frames_out, cfg.iface[0] != '\0' ? cfg.iface : "can0");
     if (rc != 0) {
         fprintf(stderr, "hstpfd: cannot start the estimator: %s (%d)\n",
-                rc == -100 ? "receiver configuration" : hstpf_strerror(rc), rc);
+                rc == -100            ? "receiver configuration"
+                : rc == HSTPFD_E_SCHED ? "step_period_s, predict_period_s, the timeouts, max_gap_s and the "
+                                         "first step must be at least 1e-6 s"
+                                       : hstpf_strerror(rc),
+                rc);
         return 2;
     }
 
+    hstpfd_core_set_stop(&core, &stop_flag);
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = on_signal; /* no SA_RESTART: poll() returns EINTR */
     (void)sigemptyset(&sa.sa_mask);

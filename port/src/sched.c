@@ -20,16 +20,20 @@ static int pos_fin(double x)
     return x > 0.0 && x < 1e12; /* also false for NaN */
 }
 
+/* No step shorter than 1 us: time is counted in whole microseconds. */
+#define MIN_STEP_S 1e-6
+
 int hstpfd_sched_init(hstpfd_sched_t *s, const hstpfd_sched_config_t *cfg, hstpfd_step_fn fn, void *ctx)
 {
     const hstpfd_sched_config_t *c = cfg;
     if (s == NULL || c == NULL) {
         return -1;
     }
-    if (!(c->step_period_s >= 0.0 && c->step_period_s <= HSTPF_DT_MAX_S) || !pos_fin(c->pos_timeout_s) ||
-        !pos_fin(c->trac_timeout_s) || !pos_fin(c->predict_period_s) ||
-        c->predict_period_s > HSTPF_DT_MAX_S || !pos_fin(c->max_gap_s) || !pos_fin(c->first_dt_s) ||
-        c->first_dt_s > HSTPF_DT_MAX_S || !pos_fin(c->mass_t) ||
+    if (!((c->step_period_s == 0.0 || c->step_period_s >= MIN_STEP_S) && c->step_period_s <= HSTPF_DT_MAX_S) ||
+        !(c->pos_timeout_s >= MIN_STEP_S) || !pos_fin(c->pos_timeout_s) || !(c->trac_timeout_s >= MIN_STEP_S) ||
+        !pos_fin(c->trac_timeout_s) || !(c->predict_period_s >= MIN_STEP_S) ||
+        c->predict_period_s > HSTPF_DT_MAX_S || !(c->max_gap_s >= MIN_STEP_S) || !pos_fin(c->max_gap_s) ||
+        !(c->first_dt_s >= MIN_STEP_S) || c->first_dt_s > HSTPF_DT_MAX_S || !pos_fin(c->mass_t) ||
         (c->traction_mode != HSTPFD_TRACTION_MEAN && c->traction_mode != HSTPFD_TRACTION_LATEST) ||
         (c->stale_policy != HSTPFD_STALE_PREDICT && c->stale_policy != HSTPFD_STALE_WAIT)) {
         return -1;
@@ -157,6 +161,11 @@ static void advance(hstpfd_sched_t *s, int64_t t)
     }
     if (s->pos_stale && s->have_step && s->cfg.stale_policy == HSTPFD_STALE_PREDICT) {
         while (t - s->t_step > s->pred_us) {
+            if (s->stop != NULL && *s->stop) {
+                s->t_step = t - s->pred_us; /* the rest is not predicted */
+                seg_reset(s, s->t_step);
+                break;
+            }
             emit(s, s->t_step + s->pred_us, 0, 0.0, 0, 1);
         }
     }
@@ -165,6 +174,33 @@ static void advance(hstpfd_sched_t *s, int64_t t)
         s->t_step = t;
         seg_reset(s, t);
     }
+}
+
+void hstpfd_sched_set_stop(hstpfd_sched_t *s, const volatile sig_atomic_t *stop)
+{
+    s->stop = stop;
+}
+
+void hstpfd_sched_clock_step(hstpfd_sched_t *s, int64_t t_us, int dir)
+{
+    if (dir > 0) {
+        ++s->n.clock_fwd;
+    } else {
+        ++s->n.clock_back;
+    }
+    if (!s->started) {
+        return;
+    }
+    if (t_us > s->t_now) {
+        s->t_now = t_us;
+    }
+    if (s->have_step) {
+        /* nothing is predicted across the step; the next fix starts again */
+        s->t_step = s->t_now;
+        seg_reset(s, s->t_step);
+        s->restart_next = 1;
+    }
+    s->have_fix = 0; /* the fix clock starts again from the next fix */
 }
 
 void hstpfd_sched_time(hstpfd_sched_t *s, int64_t t_us)
@@ -183,14 +219,66 @@ void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn)
     s->trac_stale = 0;
 }
 
+#define FIX_WRAP_US ((int64_t)HSTPFD_SCHED_FIX_WRAP_MS * 1000)
+/* Consecutive fixes (a few 100 ms cycles) are at most this far apart. */
+#define FIX_SEQ_MAX_US INT64_C(2000000)
+
+/* floor(a / b), b > 0 */
+static int64_t floor_div(int64_t a, int64_t b)
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/* Timeline time of a fix received at t_rx (see the rules in sched.h). */
+static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_sequence)
+{
+    if (!s->have_fix) {
+        s->have_fix = 1;
+        s->fix_u = (int64_t)fix_ms * 1000;
+        s->fix_off = t_rx - s->fix_u;
+    } else {
+        int64_t d = (int64_t)((fix_ms - s->fix_ms_last + HSTPFD_SCHED_FIX_WRAP_MS) % HSTPFD_SCHED_FIX_WRAP_MS) * 1000;
+        int64_t off;
+        if (in_sequence && d > FIX_WRAP_US / 2) {
+            d -= FIX_WRAP_US; /* older than the last fix */
+        }
+        if (in_sequence && (d > FIX_SEQ_MAX_US || d < -FIX_SEQ_MAX_US)) {
+            in_sequence = 0; /* more than a few cycles apart: not the next fix after all */
+        }
+        if (!in_sequence) {
+            d = (int64_t)((fix_ms - s->fix_ms_last + HSTPFD_SCHED_FIX_WRAP_MS) % HSTPFD_SCHED_FIX_WRAP_MS) * 1000;
+            d += floor_div(t_rx - s->fix_rx - d + FIX_WRAP_US / 2, FIX_WRAP_US) * FIX_WRAP_US;
+        }
+        s->fix_u += d;
+        /* least latency seen; creeps up by 100 ppm so a drifting clock is followed */
+        off = s->fix_off + (t_rx - s->fix_rx) / 10000;
+        if (t_rx - s->fix_u < off) {
+            off = t_rx - s->fix_u;
+        }
+        s->fix_off = off;
+    }
+    s->fix_ms_last = fix_ms;
+    s->fix_rx = t_rx;
+    ++s->n.fix_dated;
+    return s->fix_u + s->fix_off;
+}
+
 void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m)
+{
+    hstpfd_sched_position_at(s, t_us, position_m, HSTPFD_NO_FIX_TIME, 0);
+}
+
+void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m, int32_t fix_ms, int in_sequence)
 {
     int64_t gap;
     const int had_step = s->have_step;
     advance(s, t_us);
-    t_us = s->t_now;
     s->have_pos = 1;
-    s->t_pos = t_us;
+    s->t_pos = s->t_now; /* staleness runs on the receive clock */
+    t_us = s->t_now;
+    if (fix_ms >= 0 && fix_ms < HSTPFD_SCHED_FIX_WRAP_MS) {
+        t_us = fix_time(s, s->t_now, fix_ms, in_sequence);
+    }
     if (!had_step) {
         /* the first step has length first_dt_s and the traction held now */
         s->pos_stale = 0;
@@ -217,8 +305,11 @@ void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m)
         s->t_due = t_us + s->step_us; /* fell behind the grid: start it again */
     }
     s->pos_stale = 0;
-    if (gap > s->gap_us) {
-        ++s->n.restarts;
+    if (s->restart_next || gap > s->gap_us) {
+        if (!s->restart_next) {
+            ++s->n.restarts;
+        }
+        s->restart_next = 0;
         emit(s, t_us, 1, position_m, 1, 0);
         return;
     }

@@ -10,6 +10,15 @@
  *   gap the grid restarts at the step that ends it.
  * - dt = time of this position - time of the last step (first step:
  *   first_dt_s). A position not newer than the last step is dropped (late).
+ * - Time of a position: its fix time when the frame carries one (the
+ *   sender's wrapping millisecond clock, Position.FixTime), mapped onto the
+ *   receive timeline, else its receive time. The mapping ("fix clock"):
+ *   fix times are unwrapped (between consecutive fixes of one unbroken E2E
+ *   sequence: the difference modulo the wrap, taken in (-wrap/2, wrap/2];
+ *   otherwise as many whole wraps as the receive times say) and shifted by
+ *   the smallest receive latency seen, which may creep up by 100 ppm of
+ *   elapsed time (clock drift). A fix is therefore dated at or before its
+ *   receive time, and receive jitter does not enter dt.
  * - Traction: zero-order hold of the latest valid sample, converted from
  *   total force (kN) to unit force (N/kN) with the train mass. MEAN: the
  *   time-weighted mean of the held value over the step; LATEST: the value
@@ -25,10 +34,19 @@
  *   flag on the step: the caller resets it) with the new position as the
  *   first fix.
  * - Time never goes back: an earlier timestamp counts as time_backwards and
- *   is taken as the latest time seen. */
+ *   is taken as the latest time seen.
+ * - Clock steps (hstpfd_sched_clock_step, from the daemon's clock guard):
+ *   no predict steps across the step; the fix clock starts again; the next
+ *   position restarts the estimator (restart flag) as a first fix. A
+ *   shorter forward step of the receive clock is not found here: with fix
+ *   times it acts as an outage of its length (predicted across; the fixes
+ *   of that length come late and are dropped; dt stays the fixes' own).
+ * - Every loop here ends within a bounded number of steps or when *stop is
+ *   set (hstpfd_sched_set_stop): SIGTERM is honoured between steps. */
 #ifndef HSTPFD_SCHED_H
 #define HSTPFD_SCHED_H
 
+#include <signal.h>
 #include <stdint.h>
 
 #include "hstpf/hstpf.h"
@@ -73,6 +91,9 @@ typedef struct {
     uint32_t time_backwards;   /* timestamps earlier than the latest seen */
     uint32_t restarts;         /* gaps beyond max_gap_s */
     uint32_t split;            /* steps split because longer than HSTPF_DT_MAX_S */
+    uint32_t fix_dated;        /* positions dated by their fix time */
+    uint32_t clock_fwd;        /* receive clock steps forward (the daemon's guard) */
+    uint32_t clock_back;       /* receive clock steps back */
 } hstpfd_sched_counts_t;
 
 typedef struct {
@@ -91,6 +112,13 @@ typedef struct {
     int64_t seg_t[HSTPFD_SCHED_SEGMENTS];
     double seg_u[HSTPFD_SCHED_SEGMENTS];
     uint16_t n_seg;
+    /* fix clock: the last fix's time unwrapped (us), its receive time, and
+     * timeline time - unwrapped fix time */
+    uint8_t have_fix;
+    int32_t fix_ms_last;
+    int64_t fix_u, fix_rx, fix_off;
+    uint8_t restart_next; /* a clock step: the next position restarts the estimator */
+    const volatile sig_atomic_t *stop; /* loops end when *stop (may be NULL) */
     hstpfd_sched_counts_t n;
 } hstpfd_sched_t;
 
@@ -99,12 +127,28 @@ double hstpfd_traction_unit(double force_kn, double mass_t);
 
 /* Returns 0, or -1 if a config value is out of range (fn may be NULL). */
 int hstpfd_sched_init(hstpfd_sched_t *s, const hstpfd_sched_config_t *cfg, hstpfd_step_fn fn, void *ctx);
+/* Loops stop early when *stop becomes non-zero (a signal handler's flag). */
+void hstpfd_sched_set_stop(hstpfd_sched_t *s, const volatile sig_atomic_t *stop);
+
+/* The receive clock stepped (forward: +1, back: -1) and time is now t_us:
+ * nothing is predicted across it; the next position restarts. */
+void hstpfd_sched_clock_step(hstpfd_sched_t *s, int64_t t_us, int dir);
+
 /* Time has advanced to t_us without a valid sample (an invalid frame, an
  * unrelated frame, an idle tick). */
 void hstpfd_sched_time(hstpfd_sched_t *s, int64_t t_us);
 /* A valid traction sample: total force, kN (+ traction, - braking). */
 void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn);
-/* A valid position sample, m. */
+/* A valid position sample, m, dated by its receive time t_us. */
 void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m);
+
+/* Fix time wrap, ms (the DBC's Position.FixTime); no fix time: */
+#define HSTPFD_SCHED_FIX_WRAP_MS 8192
+#define HSTPFD_NO_FIX_TIME (-1)
+/* A valid position sample received at t_us with its fix time fix_ms (0 ..
+ * wrap-1, or HSTPFD_NO_FIX_TIME: dated by t_us). in_sequence: the previous
+ * fix came in the same unbroken E2E sequence just before this frame (so
+ * the fix times' difference is below the wrap). */
+void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m, int32_t fix_ms, int in_sequence);
 
 #endif

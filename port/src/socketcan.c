@@ -134,6 +134,9 @@ static void to_frame(const struct can_frame *cf, int64_t t_us, hstpfd_frame_t *f
 static int drain(hstpfd_core_t *c)
 {
     for (;;) {
+        if (c->stop != NULL && *c->stop) {
+            return 0; /* a flooded bus must not hold off SIGTERM */
+        }
         struct can_frame cf;
         struct iovec iov;
         struct msghdr msg;

@@ -6,6 +6,7 @@
  *                              conversion, cantools pack, E2E protect) and
  *                              prints one JSON line per frame: inputs, bytes,
  *                              and the values unpacked back by the C codec.
+ *   hstpf_codec_dump e2e       prints the E2E parameters the C codec uses.
  *   hstpf_codec_dump decode    reads a candump -L log on stdin and prints,
  *                              per frame, what the C codec unpacks and the
  *                              E2E check result (one default receiver per
@@ -46,22 +47,29 @@ static void head(const char *name, uint32_t id, const uint8_t *f)
     printf("\",");
 }
 
-static void position(double valid, double quality, double pos)
+static void position(double valid, double quality, double pos, double fix_valid, double fix_ms)
 {
     struct hstpf_can_position_t m;
     uint8_t f[8];
     hstpf_can_position_init(&m);
     m.pos_valid = hstpf_frames_position_pos_valid_raw(valid);
     m.pos_quality = hstpf_frames_position_pos_quality_raw(quality);
+    m.fix_time_valid = hstpf_frames_position_fix_time_valid_raw(fix_valid);
     m.position = hstpf_frames_position_position_raw(pos);
+    m.fix_time = hstpf_frames_position_fix_time_raw(fix_ms);
     hstpf_can_position_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_POSITION_ID), f, 8);
     hstpf_can_position_unpack(&m, f, 8);
     head("Position", HSTPF_FRAME_POSITION_ID, f);
-    printf("\"in\":{\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g},", valid, quality, pos);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%.17g,\"PosQuality\":%.17g,\"Position\":%.17g}}\n",
+    printf("\"in\":{\"PosValid\":%.17g,\"PosQuality\":%.17g,\"FixTimeValid\":%.17g,\"Position\":%.17g,"
+           "\"FixTime\":%.17g},",
+           valid, quality, fix_valid, pos, fix_ms);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%.17g,\"PosQuality\":%.17g,"
+           "\"FixTimeValid\":%.17g,\"Position\":%.17g,\"FixTime\":%.17g}}\n",
            m.e2e_crc, m.e2e_counter, hstpf_can_position_pos_valid_decode(m.pos_valid),
-           hstpf_can_position_pos_quality_decode(m.pos_quality), hstpf_can_position_position_decode(m.position));
+           hstpf_can_position_pos_quality_decode(m.pos_quality),
+           hstpf_can_position_fix_time_valid_decode(m.fix_time_valid), hstpf_can_position_position_decode(m.position),
+           hstpf_can_position_fix_time_decode(m.fix_time));
 }
 
 static void traction(double valid, double force)
@@ -81,22 +89,26 @@ static void traction(double valid, double force)
            hstpf_can_traction_tract_force_decode(m.tract_force));
 }
 
-static void est_state(double valid, double pos, double speed)
+static void est_state(double valid, double fault, double pos, double speed)
 {
     struct hstpf_can_est_state_t m;
     uint8_t f[8];
     hstpf_can_est_state_init(&m);
     m.est_valid = hstpf_frames_est_state_est_valid_raw(valid);
+    m.est_fault = hstpf_frames_est_state_est_fault_raw(fault);
     m.est_position = hstpf_frames_est_state_est_position_raw(pos);
     m.est_speed = hstpf_frames_est_state_est_speed_raw(speed);
     hstpf_can_est_state_pack(f, &m, 8);
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_STATE_ID), f, 8);
     hstpf_can_est_state_unpack(&m, f, 8);
     head("EstState", HSTPF_FRAME_EST_STATE_ID, f);
-    printf("\"in\":{\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g},", valid, pos, speed);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g}}\n",
+    printf("\"in\":{\"EstValid\":%.17g,\"EstFault\":%.17g,\"EstPosition\":%.17g,\"EstSpeed\":%.17g},", valid, fault,
+           pos, speed);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%.17g,\"EstFault\":%.17g,\"EstPosition\":%.17g,"
+           "\"EstSpeed\":%.17g}}\n",
            m.e2e_crc, m.e2e_counter, hstpf_can_est_state_est_valid_decode(m.est_valid),
-           hstpf_can_est_state_est_position_decode(m.est_position), hstpf_can_est_state_est_speed_decode(m.est_speed));
+           hstpf_can_est_state_est_fault_decode(m.est_fault), hstpf_can_est_state_est_position_decode(m.est_position),
+           hstpf_can_est_state_est_speed_decode(m.est_speed));
 }
 
 static void est_type(double status, double decl, double dw, double lead, double lw)
@@ -191,6 +203,55 @@ static void health_sys(double stale, double unk, double err, double deg)
            m.e2e_crc, m.e2e_counter, m.stale_events, m.unknown_id, m.error_frames, m.degeneracy);
 }
 
+static void est_quality(double valid, double fault, double still, double tvalid, double psd, double vsd, double t)
+{
+    struct hstpf_can_est_quality_t m;
+    uint8_t f[8];
+    hstpf_can_est_quality_init(&m);
+    m.qual_valid = hstpf_frames_est_quality_qual_valid_raw(valid);
+    m.qual_fault = hstpf_frames_est_quality_qual_fault_raw(fault);
+    m.standstill = hstpf_frames_est_quality_standstill_raw(still);
+    m.est_time_valid = hstpf_frames_est_quality_est_time_valid_raw(tvalid);
+    m.position_sd = hstpf_frames_est_quality_position_sd_raw(psd);
+    m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(vsd);
+    m.est_time = hstpf_frames_est_quality_est_time_raw(t);
+    hstpf_can_est_quality_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_QUALITY_ID), f, 8);
+    hstpf_can_est_quality_unpack(&m, f, 8);
+    head("EstQuality", HSTPF_FRAME_EST_QUALITY_ID, f);
+    printf("\"in\":{\"QualValid\":%.17g,\"QualFault\":%.17g,\"Standstill\":%.17g,\"EstTimeValid\":%.17g,"
+           "\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%.17g},",
+           valid, fault, still, tvalid, psd, vsd, t);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
+           "\"EstTimeValid\":%u,\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill, m.est_time_valid,
+           hstpf_can_est_quality_position_sd_decode(m.position_sd), hstpf_can_est_quality_speed_sd_decode(m.speed_sd),
+           m.est_time);
+}
+
+static void health_time(double fwd, double back, double late, double reacq, double acq)
+{
+    struct hstpf_can_health_time_t m;
+    uint8_t f[8];
+    hstpf_can_health_time_init(&m);
+    m.clock_steps_fwd = hstpf_frames_health_time_clock_steps_fwd_raw(fwd);
+    m.clock_steps_back = hstpf_frames_health_time_clock_steps_back_raw(back);
+    m.late_positions = hstpf_frames_health_time_late_positions_raw(late);
+    m.reacquisitions = hstpf_frames_health_time_reacquisitions_raw(reacq);
+    m.acquisitions = hstpf_frames_health_time_acquisitions_raw(acq);
+    hstpf_can_health_time_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_TIME_ID), f, 8);
+    hstpf_can_health_time_unpack(&m, f, 8);
+    head("HealthTime", HSTPF_FRAME_HEALTH_TIME_ID, f);
+    printf("\"in\":{\"ClockStepsFwd\":%.17g,\"ClockStepsBack\":%.17g,\"LatePositions\":%.17g,\"Reacquisitions\":%.17g,"
+           "\"Acquisitions\":%.17g},",
+           fwd, back, late, reacq, acq);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
+           "\"Reacquisitions\":%u,\"Acquisitions\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions,
+           m.acquisitions);
+}
+
 static void encode_set(void)
 {
     size_t i;
@@ -200,21 +261,21 @@ static void encode_set(void)
     }
     /* 17 position frames: the counter wraps 14 -> 0 on the way. */
     for (k = 0; k < 17; k++) {
-        position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k);
+        position(k % 5 != 3, k % 4, 97.2221 * k * k + 0.00037 * k, k % 7 != 2, (double)((k * 997) % 8192));
     }
-    position(1, 3, -2.718);      /* a noisy fix near the origin */
-    position(1, 3, 100000000.0); /* the largest position */
-    position(1, 3, -100000000.0);
+    position(1, 3, -2.718, 1, 0.0);       /* a noisy fix near the origin */
+    position(1, 3, 100000000.0, 1, 8191.0); /* the largest position, the last fix time before the wrap */
+    position(1, 3, -100000000.0, 0, 0.0);
     traction(1, 0.0);
     traction(1, 187.33);
     traction(1, -412.07);
     traction(0, -83886.08);
     traction(1, 83886.07);
-    est_state(0, 0.0, 0.0);
-    est_state(1, 1234.567, 97.22);
-    est_state(1, 350123.456, -0.37);
-    est_state(1, -42.0, -327.68);
-    est_state(1, 21474836.47, 327.67);
+    est_state(0, 0, 0.0, 0.0);
+    est_state(1, 0, 1234.567, 97.22);
+    est_state(1, 0, 350123.456, -0.37);
+    est_state(1, 0, -42.0, -327.68);
+    est_state(0, 1, 21474836.47, 327.67);
     est_type(0, 255, 0.0, 2, 0.4711);
     est_type(1, 2, 0.9532, 2, 0.9532);
     est_type(2, 6, 1.0, 6, 1.0);
@@ -225,6 +286,11 @@ static void encode_set(void)
     health_rx(1, 0, 17, 3, 4095, 1);
     health_sys(2, 0, 41, 4095);
     health_sys(0, 1, 0, 0);
+    health_time(1, 2, 37, 1023, 5);
+    est_quality(1, 0, 0, 1, 2.24, 0.22, 4660);
+    est_quality(1, 0, 1, 1, 0.0, 0.0, 0);
+    est_quality(0, 1, 0, 0, 10485.75, 40.95, 8191);
+    est_type(3, 255, 0.0, 6, 0.42); /* withdrawn */
 }
 
 /* ---- decode side ---------------------------------------------------------- */
@@ -283,8 +349,10 @@ static int decode_line(const char *line)
     case HSTPF_FRAME_POSITION_ID: {
         struct hstpf_can_position_t m;
         hstpf_can_position_unpack(&m, f, n);
-        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%u,\"PosQuality\":%u,\"Position\":%.17g", m.e2e_crc,
-               m.e2e_counter, m.pos_valid, m.pos_quality, hstpf_can_position_position_decode(m.position));
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosValid\":%u,\"PosQuality\":%u,\"FixTimeValid\":%u,"
+               "\"Position\":%.17g,\"FixTime\":%u",
+               m.e2e_crc, m.e2e_counter, m.pos_valid, m.pos_quality, m.fix_time_valid,
+               hstpf_can_position_position_decode(m.position), m.fix_time);
         break;
     }
     case HSTPF_FRAME_TRACTION_ID: {
@@ -297,8 +365,9 @@ static int decode_line(const char *line)
     case HSTPF_FRAME_EST_STATE_ID: {
         struct hstpf_can_est_state_t m;
         hstpf_can_est_state_unpack(&m, f, n);
-        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%u,\"EstPosition\":%.17g,\"EstSpeed\":%.17g", m.e2e_crc,
-               m.e2e_counter, m.est_valid, hstpf_can_est_state_est_position_decode(m.est_position),
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"EstValid\":%u,\"EstFault\":%u,\"EstPosition\":%.17g,"
+               "\"EstSpeed\":%.17g",
+               m.e2e_crc, m.e2e_counter, m.est_valid, m.est_fault, hstpf_can_est_state_est_position_decode(m.est_position),
                hstpf_can_est_state_est_speed_decode(m.est_speed));
         break;
     }
@@ -330,6 +399,25 @@ static int decode_line(const char *line)
                m.wrong_length);
         break;
     }
+    case HSTPF_FRAME_EST_QUALITY_ID: {
+        struct hstpf_can_est_quality_t m;
+        hstpf_can_est_quality_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"QualValid\":%u,\"QualFault\":%u,\"Standstill\":%u,"
+               "\"EstTimeValid\":%u,\"PositionSd\":%.17g,\"SpeedSd\":%.17g,\"EstTime\":%u",
+               m.e2e_crc, m.e2e_counter, m.qual_valid, m.qual_fault, m.standstill, m.est_time_valid,
+               hstpf_can_est_quality_position_sd_decode(m.position_sd),
+               hstpf_can_est_quality_speed_sd_decode(m.speed_sd), m.est_time);
+        break;
+    }
+    case HSTPF_FRAME_HEALTH_TIME_ID: {
+        struct hstpf_can_health_time_t m;
+        hstpf_can_health_time_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"ClockStepsFwd\":%u,\"ClockStepsBack\":%u,\"LatePositions\":%u,"
+               "\"Reacquisitions\":%u,\"Acquisitions\":%u",
+               m.e2e_crc, m.e2e_counter, m.clock_steps_fwd, m.clock_steps_back, m.late_positions, m.reacquisitions,
+               m.acquisitions);
+        break;
+    }
     default: {
         struct hstpf_can_health_sys_t m;
         hstpf_can_health_sys_unpack(&m, f, n);
@@ -349,7 +437,7 @@ static int decode_stdin(void)
     size_t i;
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         hstpf_e2e_rx_config_t c;
-        hstpf_e2e_rx_config_default(&c, hstpf_frames[i].data_id, hstpf_frames[i].length);
+        hstpf_frames_e2e_rx_config(&c, hstpf_frames[i].can_id); /* the DBC's parameters of the frame */
         hstpf_e2e_rx_init(&rx[i], &c);
     }
     while (fgets(line, sizeof line, stdin) != NULL) {
@@ -372,10 +460,33 @@ static int decode_stdin(void)
     return 0;
 }
 
+/* The E2E parameters the C codec uses: the default receiver configuration
+ * and each frame's (for tests/python/test_e2e_params.py). */
+static int e2e_params(void)
+{
+    hstpf_e2e_rx_config_t c;
+    size_t i;
+    hstpf_e2e_rx_config_default(&c, 0u, 8u);
+    printf("{\"profile\":\"%s\",\"default\":{\"max_delta\":%u,\"timeout_ms\":%u},\"frames\":{", HSTPF_E2E_PROFILE,
+           (unsigned)c.max_delta, (unsigned)c.timeout_ms);
+    for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
+        if (hstpf_frames_e2e_rx_config(&c, hstpf_frames[i].can_id) != 0) {
+            return 1;
+        }
+        printf("%s\"%s\":{\"data_id\":%u,\"max_delta\":%u,\"timeout_ms\":%u}", i ? "," : "", hstpf_frames[i].name,
+               (unsigned)c.data_id, (unsigned)c.max_delta, (unsigned)c.timeout_ms);
+    }
+    printf("}}\n");
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "decode") == 0) {
         return decode_stdin();
+    }
+    if (argc > 1 && strcmp(argv[1], "e2e") == 0) {
+        return e2e_params();
     }
     encode_set();
     return 0;

@@ -16,7 +16,7 @@ static void test_frame_table(void **state)
 {
     size_t i, j;
     (void)state;
-    assert_int_equal(HSTPF_FRAMES_COUNT, 7);
+    assert_int_equal(HSTPF_FRAMES_COUNT, 9);
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         assert_true(hstpf_frames[i].can_id <= 0x7FFu); /* 11-bit */
         assert_int_equal(hstpf_frames[i].length, 8);
@@ -39,13 +39,18 @@ static void test_raw_saturation_and_rounding(void **state)
     double nan = 0.0;
     (void)state;
     nan = nan / nan;
-    /* Position, signed 40 bit, 1 mm, [-1e8, 1e8] m. */
-    assert_true(hstpf_frames_position_position_raw(1234.5674) == 1234567);
-    assert_true(hstpf_frames_position_position_raw(1234.5676) == 1234568);
-    assert_true(hstpf_frames_position_position_raw(-3.0016) == -3002);
-    assert_true(hstpf_frames_position_position_raw(1e12) == INT64_C(100000000000));
-    assert_true(hstpf_frames_position_position_raw(-1e12) == -INT64_C(100000000000));
+    /* Position, signed 35 bit, 1 cm, [-1e8, 1e8] m. */
+    assert_true(hstpf_frames_position_position_raw(1234.5649) == 123456);
+    assert_true(hstpf_frames_position_position_raw(1234.5651) == 123457);
+    assert_true(hstpf_frames_position_position_raw(-3.0051) == -301);
+    assert_true(hstpf_frames_position_position_raw(1e12) == INT64_C(10000000000));
+    assert_true(hstpf_frames_position_position_raw(-1e12) == -INT64_C(10000000000));
     assert_true(hstpf_frames_position_position_raw(nan) == 0);
+    /* Fix time, 13 bit, 1 ms: the sender wraps it; the helper only clamps. */
+    assert_int_equal(HSTPF_FIX_TIME_WRAP_MS, 8192);
+    assert_int_equal(hstpf_frames_position_fix_time_raw(8191.0), 8191u);
+    assert_int_equal(hstpf_frames_position_fix_time_raw(9000.0), 8191u);
+    assert_int_equal(hstpf_frames_position_fix_time_raw(-5.0), 0u);
     /* Estimated position, signed 32 bit, 1 cm. */
     assert_int_equal(hstpf_frames_est_state_est_position_raw(350123.456), 35012346);
     assert_int_equal(hstpf_frames_est_state_est_position_raw(-1e9), INT32_MIN);
@@ -98,12 +103,44 @@ static void test_pack_protect_check_unpack(void **state)
     assert_int_equal(hstpf_e2e_rx_counts(&rx)->ok, 20);
 }
 
+/* The re-packed position frame: a 35-bit signed field across bytes 2..6,
+ * FixTime in the top 13 bits; each field comes back on its own. */
+static void test_position_fix_time_round_trip(void **state)
+{
+    static const double pos[] = {-100000000.0, -2.71, 0.0, 0.01, 1234567.89, 100000000.0};
+    static const uint16_t fix[] = {0u, 1u, 4095u, 4096u, 8190u, 8191u};
+    struct hstpf_can_position_t m, back;
+    uint8_t f[8];
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof pos / sizeof pos[0]; i++) {
+        assert_int_equal(hstpf_can_position_init(&m), 0);
+        m.pos_valid = 1;
+        m.pos_quality = 3;
+        m.fix_time_valid = 1;
+        m.position = hstpf_frames_position_position_raw(pos[i]);
+        m.fix_time = fix[i];
+        assert_int_equal(hstpf_can_position_pack(f, &m, sizeof f), 8);
+        /* by hand: FixTime is bits 51..63, i.e. the top 13 bits of bytes 6..7 */
+        assert_int_equal(((unsigned)f[6] >> 3) | ((unsigned)f[7] << 5), fix[i]);
+        assert_int_equal((f[1] >> 4) & 1u, 1);         /* PosValid, bit 12 */
+        assert_int_equal((f[1] >> 5) & 3u, 3);         /* PosQuality, bits 13..14 */
+        assert_int_equal((f[1] >> 7) & 1u, 1);         /* FixTimeValid, bit 15 */
+        assert_int_equal(hstpf_can_position_unpack(&back, f, sizeof f), 0);
+        assert_int_equal(back.fix_time, fix[i]);
+        assert_int_equal(back.fix_time_valid, 1);
+        assert_int_equal(back.pos_quality, 3);
+        assert_float_equal(hstpf_can_position_position_decode(back.position), pos[i], 0.005 + 1e-9);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_frame_table),
         cmocka_unit_test(test_raw_saturation_and_rounding),
         cmocka_unit_test(test_pack_protect_check_unpack),
+        cmocka_unit_test(test_position_fix_time_round_trip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,6 +14,9 @@
 
 static FILE *logf_;
 static int time_div_ = 1;
+static int jitter_ms_ = 0;
+static int64_t last_rx_ = 0;
+static uint32_t lcg_ = 1u;
 
 static void put(int64_t t_us, uint32_t id, uint8_t flags, const uint8_t *d, uint8_t len)
 {
@@ -21,6 +24,14 @@ static void put(int64_t t_us, uint32_t id, uint8_t flags, const uint8_t *d, uint
     char line[256];
     memset(&f, 0, sizeof f);
     f.t_us = T0_US + (t_us - T0_US) / time_div_;
+    if (jitter_ms_ > 0) { /* a delay; a frame is never stamped before the one sent ahead of it */
+        lcg_ = lcg_ * 1103515245u + 12345u;
+        f.t_us += (int64_t)((lcg_ >> 8) % (uint32_t)(jitter_ms_ * 1000 + 1));
+        if (f.t_us < last_rx_) {
+            f.t_us = last_rx_;
+        }
+        last_rx_ = f.t_us;
+    }
     f.id = id;
     f.flags = flags;
     f.len = len;
@@ -66,6 +77,9 @@ int genlog(const genlog_t *g)
         return -1;
     }
     time_div_ = g->time_div;
+    jitter_ms_ = g->jitter_ms;
+    last_rx_ = 0;
+    lcg_ = 1u;
     hstpf_sim_default(&sc);
     sc.seed = g->seed;
     hstpf_sim_init(&sim, &sc);
@@ -87,6 +101,10 @@ int genlog(const genlog_t *g)
             p.pos_valid = 1;
             p.pos_quality = 2;
             p.position = hstpf_frames_position_position_raw(y);
+            if (!g->no_fix_time) { /* the measurement's own time, ms modulo the wrap */
+                p.fix_time_valid = 1;
+                p.fix_time = (uint16_t)((unsigned)(k * 1000 + j * 100) % HSTPF_FIX_TIME_WRAP_MS);
+            }
             (void)hstpf_can_position_pack(d, &p, 8);
             (void)hstpf_e2e_protect(&tx_pos, d, 8);
             if (!silent) {

@@ -16,6 +16,8 @@ typedef struct {
     int time_div;    /* timestamps compressed this many times (a sped-up capture) */
     uint64_t seed;   /* simulator seed */
     double mass_t;   /* train mass for the traction force */
+    int no_fix_time; /* 1: position frames without a fix time (FixTimeValid 0) */
+    int jitter_ms;   /* receive stamps delayed by a pseudo-random 0..jitter_ms (a loaded gateway; order kept) */
 } genlog_t;
 
 /* Returns 0, or -1 if the file cannot be written. */

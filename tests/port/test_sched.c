@@ -341,6 +341,71 @@ static void test_before_first_fix(void **state)
     assert_int_equal(s.pos_stale, 0);
 }
 
+/* Fix times (Position.FixTime): dt is the difference of the fixes' own
+ * times, whatever the receive latency; the 8192 ms wrap is crossed. The
+ * mapping keeps the least latency seen (5 ms, the first) and lets it creep
+ * up by 100 ppm of receive time: at most 0.1 ms per 0.1 s step here.
+ * Frames arrive in order: a frame is not received before its predecessor. */
+static void test_fix_time_dates_fixes(void **state)
+{
+    static const int lat_ms[10] = {5, 80, 20, 150, 5, 60, 300, 10, 5, 40};
+    hstpfd_sched_t s;
+    hstpfd_sched_config_t c = base();
+    int64_t rx[10];
+    int k;
+    (void)state;
+    c.stale_policy = HSTPFD_STALE_WAIT;
+    start(&s, &c);
+    for (k = 0; k < 10; ++k) {
+        const int32_t f = 8000 + 100 * k; /* crosses the wrap at k = 2 */
+        rx[k] = T0 + S(f / 1000.0) + S(lat_ms[k] / 1000.0);
+        if (k > 0 && rx[k] < rx[k - 1]) {
+            rx[k] = rx[k - 1];
+        }
+        hstpfd_sched_position_at(&s, rx[k], (double)k, f % 8192, k > 0);
+    }
+    assert_int_equal(n_got, 10);
+    assert_int_equal(s.n.fix_dated, 10);
+    assert_int_equal(s.n.time_backwards, 0);
+    for (k = 1; k < 10; ++k) {
+        /* by receive time dt would be 0.1 + (lat_k - lat_k-1): up to 0.39 s */
+        assert_true(got[k].in.dt_s >= 0.1 && got[k].in.dt_s <= 0.1 + 1e-4);
+        assert_true(got[k].t_us <= rx[k]); /* never dated after its receipt */
+    }
+    /* a fix older than the last one (same sequence): late, and the next one
+     * is dated from it (150 ms later, so 100 ms after the last step) */
+    hstpfd_sched_position_at(&s, T0 + S(9.0), 9.5, (8900 - 50) % 8192, 1);
+    assert_int_equal(s.n.late, 1);
+    hstpfd_sched_position_at(&s, T0 + S(9.1), 10.0, 9000 % 8192, 1);
+    assert_int_equal(n_got, 11);
+    assert_true(got[10].in.dt_s >= 0.1 && got[10].in.dt_s <= 0.1 + 1e-4);
+    /* after an outage (not in sequence) the receive times count the wraps:
+     * 20 s later is 2 x 8192 + 3616 ms (3.616 s apart is too far for
+     * consecutive fixes, so even a fix flagged in sequence is unwrapped so) */
+    hstpfd_sched_position_at(&s, T0 + S(29.0 + 0.03), 20.0, (29000) % 8192, 0);
+    assert_int_equal(n_got, 12);
+    assert_true(got[11].in.dt_s >= 20.0 && got[11].in.dt_s <= 20.0 + 20.1 * 1e-4);
+    hstpfd_sched_position_at(&s, T0 + S(49.0 + 0.03), 40.0, (49000) % 8192, 1);
+    assert_int_equal(n_got, 13);
+    assert_true(got[12].in.dt_s >= 20.0 && got[12].in.dt_s <= 20.0 + 20.1 * 1e-4);
+}
+
+/* A fix without a fix time is dated by its receive time (the fallback). */
+static void test_fix_time_absent(void **state)
+{
+    hstpfd_sched_t s;
+    hstpfd_sched_config_t c = base();
+    (void)state;
+    start(&s, &c);
+    hstpfd_sched_position_at(&s, T0, 0.0, HSTPFD_NO_FIX_TIME, 0);
+    hstpfd_sched_position_at(&s, T0 + S(0.25), 1.0, HSTPFD_NO_FIX_TIME, 1);
+    hstpfd_sched_position_at(&s, T0 + S(0.3), 2.0, 8192, 1); /* out of range: ignored */
+    assert_int_equal(n_got, 3);
+    assert_float_equal(got[1].in.dt_s, 0.25, 1e-12);
+    assert_float_equal(got[2].in.dt_s, 0.05, 1e-12);
+    assert_int_equal(s.n.fix_dated, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -357,6 +422,8 @@ int main(void)
         cmocka_unit_test(test_long_gaps),
         cmocka_unit_test(test_time_order),
         cmocka_unit_test(test_before_first_fix),
+        cmocka_unit_test(test_fix_time_dates_fixes),
+        cmocka_unit_test(test_fix_time_absent),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

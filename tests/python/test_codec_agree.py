@@ -64,6 +64,10 @@ def test_c_decodes_python_frames(codec_dump, tmp_path):
         ("EstTheta", {"ThetaValid": 1, "C0": 0.79, "C1": 0.0064, "C2": 0.000115}),
         ("HealthRx", {"PosStale": 1, "BadCrc": 12, "CounterRepeat": 3, "CounterJump": 4095, "WrongLength": 7}),
         ("HealthSys", {"StaleEvents": 2, "UnknownId": 5, "ErrorFrames": 1, "Degeneracy": 9}),
+        ("EstQuality", {"QualValid": 1, "Standstill": 1, "EstTimeValid": 1, "PositionSd": 3.21, "SpeedSd": 0.17,
+                        "EstTime": 4321}),
+        ("HealthTime", {"ClockStepsFwd": 1, "ClockStepsBack": 2, "LatePositions": 3, "Reacquisitions": 4,
+                        "Acquisitions": 5}),
     ]
     from hstpf_tools.logio import message
     msgs = []

@@ -30,7 +30,10 @@ def test_round_trip_force_kn(tmp_path, capsys):
     trac = [(t, s["TractValid"], s["TractForce"]) for t, n, s, _ in d if n == "Traction"]
     assert [p[0] for p in pos] == pytest.approx([1000.0, 1000.1, 1000.2, 1000.3, 1000.5])
     assert [p[1] for p in pos] == [1, 1, 0, 1, 1]  # an empty cell clears the valid bit
-    assert [p[2] for p in pos] == pytest.approx([0.0, 0.25, 0.0, 0.987, -1.5], abs=0.0006)
+    assert [p[2] for p in pos] == pytest.approx([0.0, 0.25, 0.0, 0.99, -1.5], abs=0.0051)  # 1 cm
+    # fix times: --t0 + time_s in ms modulo 8192 (1000.1 s = 1000100 ms = 122 x 8192 + 676), none when invalid
+    fixes = [(s["FixTimeValid"], s["FixTime"]) for t, n, s, _ in d if n == "Position"]
+    assert fixes == [(1, 1000000 % 8192), (1, 676), (0, 0), (1, 1000300 % 8192), (1, 1000500 % 8192)]
     assert [p[1] for p in trac] == [1, 1, 1, 0, 1]  # nan too
     assert [p[2] for p in trac] == pytest.approx([120.5, 119.99, 118.0, 0.0, -300.25], abs=0.0051)
 
@@ -47,6 +50,19 @@ def test_unit_force_needs_mass(tmp_path):
 def test_bad_input(tmp_path):
     csv = tmp_path / "b.csv"
     csv.write_text("time_s,position_m,force_kn\n1,0,0\n0.5,0,0\n")
-    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 2  # time going back
+    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 3  # time going back: input not valid
     csv.write_text("t,pos,f\n1,0,0\n")
-    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 2
+    assert encode.main([str(csv), "-o", str(tmp_path / "x.log")]) == 3
+
+
+def test_fix_time_column_and_none(tmp_path):
+    """fix_time_s gives the measurement's own time (rows may be sent late);
+    an empty cell or --no-fix-time sends the position without one."""
+    csv = tmp_path / "f.csv"
+    csv.write_text("time_s,position_m,force_kn,fix_time_s\n0.0,0,1,-0.05\n0.1,1,1,8.142\n0.2,2,1,\n")
+    assert encode.main([str(csv), "-o", str(tmp_path / "f.log")]) == 0
+    fixes = [(s["FixTimeValid"], s["FixTime"]) for _, n, s, _ in decode(tmp_path / "f.log") if n == "Position"]
+    # -50 ms is 8142 modulo 8192, as is 8142 ms: the wrap is taken modulo, never clamped
+    assert fixes == [(1, 8142), (1, 8142), (0, 0)]
+    assert encode.main([str(csv), "-o", str(tmp_path / "n.log"), "--no-fix-time"]) == 0
+    assert all(s["FixTimeValid"] == 0 for _, n, s, _ in decode(tmp_path / "n.log") if n == "Position")

@@ -84,11 +84,11 @@ def test_cli_to_log_and_report(clean_msgs, tmp_path, capsys):
     src, out, rep = tmp_path / "in.log", tmp_path / "out.log", tmp_path / "rep.json"
     write_log(str(src), clean_msgs)
     assert replay.main([str(src), "-o", str(out), "--duplicate-window", "5:6", "--ids", "0x101", "--report", str(rep)]) == 0
-    printed = json.loads(capsys.readouterr().out)
-    assert printed == json.loads(rep.read_text())
+    assert capsys.readouterr().out == ""  # the report went to --report (--json) only
+    printed = json.loads(rep.read_text())
     assert printed["injected"] == {"duplicate": {"0x101": 10}}
     assert len(read_log(str(out))) == len(clean_msgs) + 10
-    assert replay.main([str(src)]) == 2  # neither a channel nor an output
+    assert replay.main([str(src), "--no-bus"]) == 2  # neither a bus nor an output
     assert replay.main([str(src), "-o", str(out), "--drop", "0.7", "--corrupt", "0.7"]) == 2
 
 
@@ -121,7 +121,12 @@ def test_replay_and_record_on_virtual_bus(clean_msgs, tmp_path, capsys):
 
 
 def test_record_cli_gives_up_without_frames(tmp_path, capsys):
+    t = time.monotonic()
     assert record.main(["--interface", "virtual", "--channel", "hstpf-empty", "-o", str(tmp_path / "r.log"),
-                        "--quiet", "0.1", "--first-timeout", "0.2"]) == 1
-    assert json.loads(capsys.readouterr().out)["stopped"] == "no_frames"
-    assert record.main(["--interface", "virtual", "-o", str(tmp_path / "r.log")]) == 2
+                        "--quiet", "0.1", "--first-timeout", "0.2"]) == 5  # no traffic
+    assert 0.2 <= time.monotonic() - t < 5
+    out = capsys.readouterr()
+    assert json.loads(out.out)["stopped"] == "no_frames"
+    assert out.err == "hstpf-record: no frame came within 0.2 s\n"
+    assert (tmp_path / "r.log").read_text() == ""  # created and closed
+    assert record.main(["--interface", "virtual", "-o", str(tmp_path / "r.log"), "--max-frames", "0"]) == 2

@@ -130,3 +130,139 @@ def test_wrong_declaration_is_reported(sim, tmp_path):
     wt = CRH3[0] + CRH3[1] * V + CRH3[2] * V**2
     we = SS8[0] + SS8[1] * V + SS8[2] * V**2
     assert res["w_rms_rel_err"] == pytest.approx(np.sqrt(np.mean(((we - wt) / wt) ** 2)), rel=1e-3)
+
+
+def test_quality_frames_coverage(sim, tmp_path):
+    """EstQuality (position and speed sd, sent with each EstState): the
+    score's 95 % coverage is the share of steps whose error lies within
+    1.96 sd. The scripted errors are 1 m and 0.1 m/s; the position sd is
+    0.5 m (1.96 x 0.5 < 1: not covered) on even seconds and 1 m (covered)
+    on odd ones, the speed sd 0.1 m/s (always covered)."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for k in range(0, len(rows) - 1):
+        s, v = float(rows["position_m"][k]), float(rows["speed_mps"][k])
+        for fid, data in outputs(codec, float(k), s, v):
+            msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "PositionSd": 0.5 if k % 2 == 0 else 1.0,
+                                                "SpeedSd": 0.1, "Acquisitions": 1})
+        msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("HealthTime", {"ClockStepsFwd": 1, "Reacquisitions": 2})
+        msgs.append(message(float(k), fid, data))
+    rec = tmp_path / "q.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "q.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["quality_frames"] == res["state_frames"] == len(rows) - 1
+    assert res["position_95_coverage"] == pytest.approx(0.5, abs=1.0 / len(rows) + 1e-9)
+    assert res["speed_95_coverage"] == 1.0
+    assert res["position_sd_median_m"] == pytest.approx(0.75)
+    assert res["health"]["ClockStepsFwd"] == 1 and res["health"]["Reacquisitions"] == 2
+
+
+@pytest.mark.parametrize("dated", [True, False])
+def test_est_time_dates_late_outputs(sim, tmp_path, dated):
+    """The estimator's outputs reach the bus 7 input frames (0.7 s) after the
+    position they were computed from (a busy estimator). Inputs alignment
+    alone times them by the latest input and scores the lag as error; with
+    EstQuality.EstTime (the step's fix time) they are dated right and the
+    scripted 1 m / 0.1 m/s errors come back."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs, queue = [], []
+    fix_of = {}
+    for m in read_log(str(log)):
+        msgs.append(message(m.timestamp, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id != 0x100:
+            continue
+        _, sig, _ = FrameCodec().decode(0x100, bytes(m.data), check=False)
+        t = m.timestamp
+        if abs(t - round(t)) < 1e-6:  # one step per second, on this fix
+            queue.append((t, sig["FixTime"]))
+        if len(queue) and t - queue[0][0] >= 0.7 - 1e-9:
+            ts, fix = queue.pop(0)
+            s = np.interp(ts, rows["time_s"], rows["position_m"])
+            v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+            fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+            msgs.append(message(t + 0.0001, fid, data))
+            fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": int(dated), "EstTime": fix,
+                                                    "PositionSd": 1.0, "SpeedSd": 0.1})
+            msgs.append(message(t + 0.0002, fid, data))
+            fix_of[ts] = fix
+    rec = tmp_path / "late.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "late.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    if dated:
+        assert res["state_frames_dated"] >= res["state_frames"] > 300
+        assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+        assert res["speed_rms_mps"] == pytest.approx(0.1, abs=0.006)
+    else:
+        assert res["state_frames_dated"] == 0
+        assert res["position_rms_m"] > 5.0  # 0.7 s of travel at up to ~60 m/s
+
+
+def test_est_time_after_the_latest_input(sim, tmp_path):
+    """A predict-only step can end after the latest position seen (the
+    positions are late): EstTime then lies ahead of that input's FixTime and
+    is dated ahead of it, not a wrap (8.192 s) earlier."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for m in read_log(str(log)):
+        msgs.append(message(m.timestamp, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id != 0x100 or abs(m.timestamp - round(m.timestamp)) > 1e-6:
+            continue
+        _, sig, _ = FrameCodec().decode(0x100, bytes(m.data), check=False)
+        ts = m.timestamp + 0.5  # predicted half a second past this fix
+        s = np.interp(ts, rows["time_s"], rows["position_m"])
+        v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(m.timestamp + 0.0001, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1, "EstTime": (sig["FixTime"] + 500) % 8192})
+        msgs.append(message(m.timestamp + 0.0002, fid, data))
+    rec = tmp_path / "ahead.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "ahead.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] >= res["state_frames"] > 300  # the last one, at 400.5 s, is past the truth
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+
+
+def test_est_time_during_a_stall(sim, tmp_path):
+    """The inputs stall for 6 s (more than half the 8.192 s wrap) while the
+    estimator predicts on: its estimates end up to 6 s past the latest
+    input seen and are dated there (from how long after it they came), not
+    a wrap earlier."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    fix0 = None
+    for m in read_log(str(log)):
+        t = m.timestamp
+        if 200.0 < t < 206.0:
+            continue  # the stalled inputs never reach the bus
+        msgs.append(message(t, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id == 0x100 and fix0 is None:
+            fix0 = FrameCodec().decode(0x100, bytes(m.data), check=False)[1]["FixTime"] - round(t * 1000) % 8192
+    for k in range(1, 6):  # predictions at 201..205 s
+        ts = 200.0 + k
+        s = np.interp(ts, rows["time_s"], rows["position_m"])
+        v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(ts + 0.0001, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1,
+                                                "EstTime": (round(ts * 1000) + fix0) % 8192})
+        msgs.append(message(ts + 0.0002, fid, data))
+    msgs.sort(key=lambda m: m.timestamp)
+    rec = tmp_path / "stall.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "stall.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] == res["state_frames"] == 5
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)

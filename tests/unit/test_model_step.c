@@ -53,7 +53,7 @@ static void base_config(hstpf_config_t *c)
     c->noise_v.sd = 1e-9;
     c->noise_e.sd = 1.0;
     c->init_speed_mps = 50.0;
-    c->init_speed_sd = 0.0;
+    c->init_speed_sd = 1e-30; /* a point prior (0 would mean: from two fixes) */
     c->roughening_k = 0.0;
     c->resample = HSTPF_RESAMPLE_ESS;
     c->ess_threshold = 1e-9;

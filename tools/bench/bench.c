@@ -88,7 +88,7 @@ static double median(const double *x, unsigned n)
 static void usage(void)
 {
     fprintf(stderr,
-            "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
+            "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]... [--version]\n"
             "  MxN: M models, N particles; MxK: M models, Kalman engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
             "           --config 3xK --config 17xK\n");
@@ -167,6 +167,9 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--json") == 0) {
             json = 1;
+        } else if (strcmp(a, "--version") == 0) {
+            printf("hstpf-bench %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
+            return 0;
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--runs") == 0) {
             runs = (unsigned)strtoul(argv[++i], NULL, 10);
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--steps") == 0) {

@@ -12,7 +12,7 @@ static hstpf_t filt; /* ~100 kB: static, as on a target */
 static void usage(void)
 {
     fprintf(stderr, "usage: hstpf-demo [--case 1|2] [--seed N] [--filter-seed N] "
-                    "[--duration S] [--every S]\n");
+                    "[--duration S] [--every S] [--version]\n");
 }
 
 int main(int argc, char **argv)
@@ -31,6 +31,10 @@ int main(int argc, char **argv)
     int32_t err;
 
     for (i = 1; i < argc; ++i) {
+        if (strcmp(argv[i], "--version") == 0) {
+            printf("hstpf-demo %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
+            return 0;
+        }
         if (i + 1 < argc && strcmp(argv[i], "--case") == 0) {
             cas = atoi(argv[++i]);
         } else if (i + 1 < argc && strcmp(argv[i], "--seed") == 0) {

@@ -69,20 +69,34 @@ class Sender:
         return out
 
 
+PROFILE = "P01"  # the profile implemented here and in hstpf_e2e.c (DBC attribute HstpfE2EProfile)
+
+
 @dataclass
 class Receiver:
-    """Receiver of one stream; mirrors hstpf_e2e_rx_t (times in seconds)."""
+    """Receiver of one stream; mirrors hstpf_e2e_rx_t (times in seconds).
+    max_delta and timeout_s default to the DBC's defaults (BA_DEF_DEF_ of
+    HstpfE2EMaxDeltaCounter and HstpfE2ETimeoutMs), as
+    hstpf_e2e_rx_config_default() in C; FrameCodec passes each frame's own."""
 
     data_id: int
     length: int = 8
-    max_delta: int = 3
-    timeout_s: float = 0.5
+    max_delta: Optional[int] = None
+    timeout_s: Optional[float] = None
     counts: Dict[str, int] = field(
         default_factory=lambda: {k: 0 for k in ("ok", "lost", "wrong_length", "bad_crc", "repeated", "jump", "stale")}
     )
     _last_counter: Optional[int] = None
     _last_ok: Optional[float] = None
     stale: bool = False
+
+    def __post_init__(self):
+        if self.max_delta is None or self.timeout_s is None:
+            from .frames import e2e_defaults  # late: frames imports this module
+
+            md, to = e2e_defaults()
+            self.max_delta = md if self.max_delta is None else self.max_delta
+            self.timeout_s = to if self.timeout_s is None else self.timeout_s
 
     def _update_stale(self, now: float) -> None:
         if self._last_ok is not None and not self.stale and now - self._last_ok > self.timeout_s:

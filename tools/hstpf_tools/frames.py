@@ -12,34 +12,16 @@ from typing import Dict, Optional, Tuple
 import cantools
 
 from . import e2e
+from .table1 import TABLE1  # Table 1 from lib/src/train_types.c; its index is DeclaredType/LeaderType
 
-# Table 1 of the paper, in the order of lib/src/train_types.c (the index is
-# what DeclaredType/LeaderType carry).
-TABLE1 = (
-    ("CRH1", 0.53, 0.0026, 0.000069),
-    ("CRH2", 0.88, 0.0074, 0.000114),
-    ("CRH3", 0.79, 0.0064, 0.000115),
-    ("CRH5", 0.69, 0.0063, 0.000146),
-    ("SS1/SS3/SS4", 2.25, 0.0190, 0.000320),
-    ("SS7", 1.40, 0.0038, 0.000348),
-    ("SS8", 1.02, 0.0035, 0.000426),
-    ("DF", 2.93, 0.0073, 0.000271),
-    ("DF4/DF4B/DF4C/DF7D", 2.28, 0.0293, 0.000178),
-    ("DF8", 2.40, 0.0022, 0.000391),
-    ("DF11", 0.86, 0.0054, 0.000218),
-    ("ND5", 1.31, 0.0167, 0.000391),
-    ("ND2", 2.98, 0.0202, 0.000033),
-    ("DFH3", 2.40, 0.0095, 0.000673),
-    ("Xian Feng", 1.65, 0.0001, 0.000179),
-    ("Star EMU Central Plains", 1.28, 0.0012, 0.000195),
-    ("China Star", 1.16, 0.00534, 0.000182),
-)
 TYPE_CUSTOM = 254
 TYPE_NONE = 255
 
 POSITION, TRACTION = "Position", "Traction"
-EST_STATE, EST_TYPE, EST_THETA = "EstState", "EstType", "EstTheta"
-HEALTH_RX, HEALTH_SYS = "HealthRx", "HealthSys"
+EST_STATE, EST_QUALITY, EST_TYPE, EST_THETA = "EstState", "EstQuality", "EstType", "EstTheta"
+HEALTH_RX, HEALTH_SYS, HEALTH_TIME = "HealthRx", "HealthSys", "HealthTime"
+#: TypeStatus values (hstpf_status_t)
+STATUS_NAMES = ("undecided", "declared", "changed", "withdrawn")
 E2E_SIGNALS = ("E2eCrc", "E2eCounter")
 
 
@@ -85,15 +67,53 @@ def load_db(path: Optional[str] = None):
     return _load(str(dbc_path(path)))
 
 
+def _fix_time_wrap() -> int:
+    try:
+        sig = load_db().get_message_by_name("Position").get_signal_by_name("FixTime")
+    except FileNotFoundError:  # no source tree: the DBC's value (docs/can.md)
+        return 8192
+    return 1 << sig.length
+
+
+#: Position.FixTime wraps at this many ms (from the DBC's signal width).
+FIX_TIME_WRAP_MS = _fix_time_wrap()
+
+
 def data_id(msg) -> int:
     return int(msg.dbc.attributes["HstpfE2EDataId"].value)
+
+
+def _attr(db, msg, name):
+    """A message (or, msg None, network) attribute, else its BA_DEF_DEF_ default."""
+    a = (msg.dbc.attributes if msg is not None else db.dbc.attributes).get(name)
+    return a.value if a is not None else db.dbc.attribute_definitions[name].default_value
+
+
+def e2e_params(msg, db=None) -> Tuple[int, float]:
+    """(max delta counter, timeout s) of a frame's E2E receiver, from the DBC
+    (HstpfE2EMaxDeltaCounter, HstpfE2ETimeoutMs), as the C table has them."""
+    db = db or load_db()
+    return int(_attr(db, msg, "HstpfE2EMaxDeltaCounter")), int(_attr(db, msg, "HstpfE2ETimeoutMs")) / 1000.0
+
+
+def e2e_defaults(dbc: Optional[str] = None) -> Tuple[int, float]:
+    """The DBC's default receiver parameters (max delta, timeout s)."""
+    return e2e_params(None, load_db(dbc))
+
+
+def check_profile(db) -> None:
+    p = _attr(db, None, "HstpfE2EProfile")
+    if p != e2e.PROFILE:
+        raise ValueError(f"DBC HstpfE2EProfile {p!r}: only {e2e.PROFILE} is implemented")
 
 
 class FrameCodec:
     """Encoder/decoder of all hstpf frames with per-frame E2E state."""
 
-    def __init__(self, dbc: Optional[str] = None, max_delta: int = 3, timeout_s: float = 0.5):
+    def __init__(self, dbc: Optional[str] = None, max_delta: Optional[int] = None, timeout_s: Optional[float] = None):
+        """max_delta, timeout_s: every receiver's, else each frame's from the DBC."""
         self.db = load_db(dbc)
+        check_profile(self.db)
         self.senders: Dict[int, e2e.Sender] = {}
         self.receivers: Dict[int, e2e.Receiver] = {}
         self.max_delta, self.timeout_s = max_delta, timeout_s
@@ -138,9 +158,12 @@ class FrameCodec:
             return None, None, "unknown_id"
         result = e2e.OK
         if check:
-            rx = self.receivers.setdefault(
-                frame_id, e2e.Receiver(data_id(msg), msg.length, self.max_delta, self.timeout_s)
-            )
+            rx = self.receivers.get(frame_id)
+            if rx is None:
+                md, to = e2e_params(msg, self.db)
+                md = md if self.max_delta is None else self.max_delta
+                to = to if self.timeout_s is None else self.timeout_s
+                rx = self.receivers[frame_id] = e2e.Receiver(data_id(msg), msg.length, md, to)
             result = rx.check(bytes(data), now)
             if result not in e2e.ACCEPTED:
                 return msg.name, None, result

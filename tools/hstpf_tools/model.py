@@ -1,9 +1,11 @@
 """The train model of hstpf (docs/model.md, lib/include/hstpf/hstpf.h).
 
-Per step of length T (s):
+Per step of length T (s), the same rule as tools/sim/hstpf_sim.c:
     a  = xi (u - W(v) - g(s)),  xi = 9.81 / (1 + gamma) / 1000
-    v+ = v + T a  (0 if v >= 0 and that is negative: resistance and braking
-         cannot reverse the train), then + w_v
+    held (v == 0 and xi (u - c0 - g) <= 0: nothing can start the train, e.g.
+    the holding brake at a platform): s+ = s, v+ = 0, no process noise
+    otherwise:
+    v+ = max(0, v + T a + w_v)  (resistance and braking cannot reverse the train)
     s+ = s + T v + w_s
     y  = s + e
 u, W, g in N/kN; W(v) = c0 + c1 V + c2 V^2 with V = 3.6 v km/h; g from the
@@ -17,7 +19,8 @@ from typing import List, Optional, Sequence
 
 import numpy as np
 
-from .frames import TABLE1, type_index
+from .frames import type_index
+from .table1 import TABLE1
 
 G = 9.81
 
@@ -164,7 +167,34 @@ PROFILES = {
     "stops": [("accel", 250.0, 0.4), ("cruise", 400.0), ("brake", 0.0, 0.5), ("stop", 120.0)],
 }
 
-HOLD_ACCEL_MAX = 1.0  # m/s^2: the holding brake's pull towards v = 0 at a stop
+
+def _journey(first_dwell_s, legs):
+    """Phases of a timetable as hstpf-mc's journeys (tools/montecarlo/mc.c):
+    legs of (cruise km/h, s from departure to braking, dwell s; < 0 = run to
+    the end), accelerating at 0.4 and braking at 0.5 m/s^2; held at the end."""
+    ph = [("stop", first_dwell_s)] if first_dwell_s > 0 else []
+    for kmh, run_s, dwell_s in legs:
+        ph.append(("accel", kmh, 0.4))
+        if dwell_s < 0:
+            return ph + [("cruise", 1e12)]
+        ph += [("cruise", max(0.0, run_s - kmh / 3.6 / 0.4)), ("brake", 0.0, 0.5), ("stop", dwell_s)]
+    return ph + [("stop", 1e12)]
+
+
+# hstpf-mc's "stops" line (41 min, 5 stations) and "day" (4 h, 12 stations).
+PROFILES["line"] = _journey(30.0, [(300, 250, 120), (250, 200, 120), (300, 250, 120), (200, 150, 120),
+                                   (300, 200, 120)])
+PROFILES["day"] = _journey(60.0, [(300, 900, 120), (250, 600, 120), (350, 1200, 120), (200, 400, 120),
+                                  (300, 800, 120), (160, 300, 120), (300, 1000, 120), (250, 600, 120),
+                                  (350, 1100, 120), (200, 500, 120), (300, 900, 120), (250, 700, 120),
+                                  (300, 0, -1)])
+
+HOLD_BRAKE = -50.0  # N/kN: the holding brake, reported as traction during a "stop"
+
+
+def held(theta: Theta, v: float, u: float, g: float) -> bool:
+    """The train stands and nothing can start it: v == 0, u - c0 - g <= 0."""
+    return v == 0.0 and u - theta.c0 - g <= 0.0
 
 
 @dataclass
@@ -193,16 +223,19 @@ def simulate(
 ) -> Run:
     """Runs the model from rest at s = 0 for duration_s (n = round(duration/T) steps).
 
+    profile: a name of PROFILES or a list of phases in the same form.
+
     noise = (w_s, w_v, e); only w_s, w_v are used here (e is per frame).
     The true traction makes the noise-free train follow the profile:
     u = a_profile / xi + W(v) + g(s) with the current true speed and
-    position; coasting is u = 0; at a stop a holding brake pulls v to 0.
+    position; coasting is u = 0; a stop reports the holding brake
+    (HOLD_BRAKE), which brings the train to rest and holds it there.
     """
     if dt <= 0 or duration_s <= 0:
         raise ValueError("duration and step must be > 0")
     rng = rng if rng is not None else np.random.default_rng()
     track = track or Track()
-    phases = PROFILES[profile]
+    phases = PROFILES[profile] if isinstance(profile, str) else list(profile)  # a name or a phase list
     k_xi = xi(gamma)
     n = int(round(duration_s / dt))
     ws = noise[0].sample(rng, n)
@@ -242,12 +275,15 @@ def simulate(
         elif kind == "cruise":
             a = 0.0
         elif kind == "stop":
-            a = max(-HOLD_ACCEL_MAX, min(HOLD_ACCEL_MAX, -v[k] / dt))
+            a = "hold"
         else:
             a = None  # coast
         if a is None:
             u[k] = 0.0
             a_nom = k_xi * (0.0 - W(v_nom) - g_nom)
+        elif a == "hold":
+            u[k] = HOLD_BRAKE
+            a_nom = 0.0
         else:
             u[k] = a / k_xi + W(v[k]) + g[k]
             a_nom = 0.0 if kind == "stop" else a
@@ -260,12 +296,12 @@ def simulate(
             v_new = 0.0
         s_nom, v_nom = s_nom + dt * v_nom, (0.0 if kind == "stop" else v_new)
         # true train
-        acc = k_xi * (u[k] - W(v[k]) - g[k])
-        v_det = v[k] + dt * acc
-        if v[k] >= 0 and v_det < 0:
-            v_det = 0.0
-        s[k + 1] = s[k] + dt * v[k] + ws[k]
-        v[k + 1] = v_det + wv[k]
+        if held(theta, v[k], u[k], g[k]):
+            s[k + 1], v[k + 1] = s[k], 0.0
+        else:
+            acc = k_xi * (u[k] - W(v[k]) - g[k])
+            s[k + 1] = s[k] + dt * v[k] + ws[k]
+            v[k + 1] = max(0.0, v[k] + dt * acc + wv[k])
     return Run(t, s, v, u, g, names, theta, dt)
 
 

@@ -17,7 +17,6 @@ cycle) sees:
 """
 import argparse
 import copy
-import json
 import sys
 import time
 from collections import defaultdict
@@ -26,7 +25,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import can
 import numpy as np
 
-from .logio import read_log, write_log
+from . import cli
+from .logio import write_log
 
 KINDS = ("drop", "corrupt", "truncate", "duplicate", "delay", "reorder", "unknown")
 
@@ -150,43 +150,71 @@ def inject(
     return [e[2] for e in out], report
 
 
-def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, fast: bool = False) -> int:
-    """Sends with python-can's MessageSync timing, timestamps scaled by
-    1/speed (fast: no timing, back to back). Retries when the interface
-    queue is full."""
+class SendError(Exception):
+    """The bus failed while sending; `sent` frames went out before."""
+
+    def __init__(self, sent: int, cause: BaseException):
+        super().__init__(str(cause))
+        self.sent = sent
+        self.cause = cause
+
+
+def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, fast: bool = False,
+             stop: Optional[cli.Stop] = None, progress: Optional[cli.Progress] = None) -> int:
+    """Sends each message at its log time scaled by 1/speed from the first
+    (fast: back to back), as python-can's MessageSync with gap 0, but waits
+    in slices of at most 50 ms so that a stop (SIGINT/SIGTERM) ends it at
+    once. Retries when the interface queue is full. Returns the count sent;
+    SendError when the bus fails."""
     if not msgs:
         return 0
     t0 = msgs[0].timestamp
-    scaled = [_copy(m, t=t0 + (m.timestamp - t0) / speed) for m in msgs]
-    sync = can.MessageSync(scaled, timestamps=not fast, gap=0.0, skip=0)
+    w0 = time.perf_counter()
     n = 0
-    for m in sync:
+    for m in msgs:
+        if not fast:
+            due = w0 + (m.timestamp - t0) / speed
+            while not stop:
+                left = due - time.perf_counter()
+                if left <= 0:
+                    break
+                time.sleep(min(left, 0.05))
+        if stop:
+            break
         for attempt in range(200):
             try:
                 bus.send(m, timeout=0.1)
                 break
-            except can.CanOperationError:
+            except can.CanOperationError as exc:
                 if attempt == 199:
-                    raise
+                    raise SendError(n, exc) from exc
                 time.sleep(0.001)  # ENOBUFS: the tx queue drains in microseconds on vcan
+            except can.CanError as exc:
+                raise SendError(n, exc) from exc
         n += 1
+        if progress is not None:
+            progress.update(n, m.timestamp - t0)
+    if progress is not None:
+        progress.done(n, msgs[n - 1].timestamp - t0 if n else 0.0)
     return n
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = cli.Parser(
         prog="hstpf-replay",
-        description="Replay a candump log onto a CAN interface (python-can) at real time or sped up, "
-        "with reproducible fault injection. Prints a JSON report of what was injected.",
-        epilog=__doc__.split("\n", 2)[2],
+        description="Replay a candump log onto a CAN bus (python-can) at real time or sped up, "
+        "with reproducible fault injection. Prints a JSON report of what was injected. " + cli.BUS_HELP,
+        epilog=__doc__.split("\n", 2)[2] + "\nExit codes: see docs/tools.md (2 usage, 3 input, 4 bus, 6 output, "
+        "130/143 interrupted).",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("log", help="candump log (or any format python-can reads)")
-    p.add_argument("-c", "--channel", "--iface", dest="channel", help="interface channel, e.g. vcan0")
-    p.add_argument("--interface", default="socketcan", help="python-can interface (socketcan; virtual in tests)")
+    p.add_argument("log", help="candump log (or any format python-can reads); '-': candump text on stdin")
+    cli.add_bus_arguments(p)
+    p.add_argument("--bus", action=argparse.BooleanOptionalAction, default=None,
+                   help="send on the bus (default: yes, unless -o is given without any bus option)")
     p.add_argument("--speed", type=float, default=1.0, help="speed-up factor (1 = real time)")
     p.add_argument("--fast", action="store_true", help="no timing: send back to back")
-    p.add_argument("-o", "--out", help="also write the faulted stream to this log")
+    p.add_argument("-o", "--out", help="also write the faulted stream to this log ('-': candump text on stdout)")
     p.add_argument("--seed", type=int, default=1, help="fault RNG seed (1)")
     p.add_argument("--ids", type=_ids, help="IDs subject to faults, e.g. 0x100,0x101 (default all)")
     for k in KINDS:
@@ -199,44 +227,66 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--silence-len", type=float, default=2.0, help="length of a random silence, s (2)")
     p.add_argument("--delay-s", type=float, default=0.25, help="delay of a delayed frame, s (0.25)")
     p.add_argument("--unknown-id", type=lambda s: int(s, 0), default=0x7F0, help="ID of injected unknown frames (0x7F0)")
-    p.add_argument("--report", help="also write the JSON report to this file")
+    cli.add_json_argument(p, "--report", default=" (default: stdout, or stderr when -o is '-')")
+    cli.add_progress_argument(p)
     return p
 
 
-def main(argv=None, bus: Optional[can.BusABC] = None) -> int:
+def _main(argv, bus: Optional[can.BusABC]) -> int:
     a = build_parser().parse_args(argv)
-    if a.channel is None and a.out is None and bus is None:
-        print("hstpf-replay: give --channel and/or --out", file=sys.stderr)
-        return 2
     if a.speed <= 0:
-        print("hstpf-replay: --speed must be > 0", file=sys.stderr)
-        return 2
+        raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
     rates = {k: getattr(a, k) for k in KINDS}
     if any(r < 0 for r in rates.values()) or sum(rates.values()) > 1:
-        print("hstpf-replay: fault probabilities must be >= 0 and sum to at most 1", file=sys.stderr)
-        return 2
+        raise cli.CliError(cli.EXIT_USAGE, "fault probabilities must be >= 0 and sum to at most 1")
+    cli.check_stdout_once(out=a.out, json=a.json)
+    use_bus = bus is not None or (a.bus if a.bus is not None else (cli.bus_given(a) or a.out is None))
+    if not use_bus and a.out is None:
+        raise cli.CliError(cli.EXIT_USAGE, "--no-bus needs -o")
     windows = {k: getattr(a, f"{k}_window") for k in KINDS}
-    msgs, report = inject(read_log(a.log), rates, windows, a.seed, a.ids, a.silence_window, a.silence_rate,
+    msgs, report = inject(cli.load_log(a.log), rates, windows, a.seed, a.ids, a.silence_window, a.silence_rate,
                           a.silence_len, a.delay_s, a.unknown_id)
     if a.out:
-        write_log(a.out, msgs)
-    if bus is not None or a.channel is not None:
+        try:
+            write_log(a.out, msgs)
+        except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
+            raise cli.output_error(a.out, exc) from exc
+    code, failure = cli.EXIT_OK, None
+    if use_bus:
         own = bus is None
         if own:
-            bus = can.Bus(interface=a.interface, channel=a.channel)
+            bus = cli.open_bus(a)
+        span = msgs[-1].timestamp - msgs[0].timestamp if msgs else 0.0
+        progress = cli.Progress("hstpf-replay", a.progress, len(msgs), span)
+        t = time.perf_counter()
         try:
-            t = time.perf_counter()
-            report["sent"] = send_all(bus, msgs, a.speed, a.fast)
-            report["wall_s"] = round(time.perf_counter() - t, 3)
+            with cli.Stop() as stop:
+                try:
+                    report["sent"] = send_all(bus, msgs, a.speed, a.fast, stop, progress)
+                except SendError as exc:
+                    report["sent"] = exc.sent
+                    failure = f"the bus failed after {exc.sent} frames: {exc.cause}"
+                    report["error"] = failure
+                    code = cli.EXIT_BUS
         finally:
+            report["wall_s"] = round(time.perf_counter() - t, 3)
             if own:
                 bus.shutdown()
-    text = json.dumps(report, sort_keys=True)
-    print(text)
-    if a.report:
-        with open(a.report, "w") as f:
-            f.write(text + "\n")
-    return 0
+        if stop:
+            report["interrupted"] = stop.name
+            code = code or 128 + stop.signum
+    cli.emit_report(report, a.json, stdout_taken=a.out == "-")
+    if failure:
+        print(f"hstpf-replay: {failure}", file=sys.stderr)
+    elif code:
+        print(f"hstpf-replay: interrupted by {report['interrupted']} after {report['sent']} of "
+              f"{len(msgs)} frames", file=sys.stderr)
+    return code
+
+
+def main(argv=None, bus: Optional[can.BusABC] = None) -> int:
+    """Console entry point; `bus` (tests): an open bus to use instead of the configured one."""
+    return cli.run("hstpf-replay", _main, argv, bus)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,10 @@
 """hstpf-score: the estimator's output frames against the simulation's truth.
 
-Frame times are mapped to simulation time in one of two ways:
+An EstState frame followed by an EstQuality frame with EstTimeValid is
+dated by EstQuality.EstTime, the estimate's own time on the position
+sender's fix clock (inputs alignment: through the latest input's FixTime),
+whatever the bus or estimator latency. Other frame times are mapped to
+simulation time in one of two ways:
   inputs  the recorded log also holds the Position frames that were on the
           bus; each one is found by content in the simulated input log
           (--input-log), whose frame times are simulation times (+ its
@@ -13,31 +17,34 @@ Frame times are mapped to simulation time in one of two ways:
 """
 import argparse
 import csv
+import io
 import json
 import math
+import re
 import sys
 from pathlib import Path
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from . import e2e
-from .frames import (EST_STATE, EST_THETA, EST_TYPE, HEALTH_RX, HEALTH_SYS, POSITION, TYPE_NONE, FrameCodec,
-                     type_name)
-from .logio import read_log
+from . import cli, e2e, runconfig
+from .frames import (EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS,
+                     HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE, FrameCodec, type_name)
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
+OUTPUT_SENDER = "HSTPF"  # the DBC node of the estimator: its frames are the outputs
+Z95 = 1.959963984540054  # two-sided 95 % of a normal distribution
 
 
 def read_truth(path: str) -> Dict[str, np.ndarray]:
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    rows = list(csv.DictReader(io.StringIO(cli.read_text(path))))
     if not rows:
         raise ValueError(f"{path}: no rows")
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
+    out["identity"] = {k: r0[k] for k in ("type", "seed", "noise", "profile") if r0.get(k)}
     return out
 
 
@@ -50,7 +57,8 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
 
 def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
     """Decoded output series with simulation times."""
-    series: Dict[str, List] = {EST_STATE: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [], HEALTH_SYS: []}
+    series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
+                               HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
     t_in: Optional[float] = None  # bus time of the latest matched input
     e2e_results: Dict[str, Dict[str, int]] = {}
@@ -62,6 +70,28 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
+    # For dating by EstTime: simulation time as the bus clock runs, from the
+    # inputs with the least latency (as hstpfd's fix clock does): rate =
+    # the replay's speed-up, lag = the least latency. An estimator steps on
+    # that clock, so an estimate lies near sim_of(its bus time).
+    in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
+                       if m.arbitration_id == pos_id and bytes(m.data) in input_map])
+    rate, lag = 1.0, 0.0
+    if len(in_ts) > 10 and np.ptp(in_ts) > 0:
+        rate = float(np.polyfit(in_ts, in_sim, 1)[0])
+        lag = float(np.min(rate * np.array(in_ts) - in_sim))
+    pos_msg = codec.message(POSITION)
+    fix_in: Optional[int] = None  # FixTime of the latest matched input
+    pending = None  # an EstState waiting for the EstQuality frame that dates it
+    n_dated = 0
+
+    def keep(name, t, ts, sig):
+        if t is None:
+            return
+        if align == "inputs" and name in (EST_STATE, EST_QUALITY) and t_in is not None and ts - t_in > max_age:
+            return
+        series[name].append((t, sig))
+
     for m in rec_msgs:
         if m.is_error_frame:
             continue
@@ -70,21 +100,80 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             if t is not None:
                 t_sim = t
                 t_in = m.timestamp
+                p = pos_msg.decode(bytes(m.data), decode_choices=False)
+                fix_in = int(p["FixTime"]) if p.get("FixTimeValid", 0) >= 0.5 else None
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
-            continue
+            if name is None or OUTPUT_SENDER not in (codec.message(name).senders or ()):
+                continue  # inputs and unknown IDs
+            series[name] = []  # an estimator frame this tool has no name for (e.g. the sd of the state)
         e2e_results.setdefault(name, {}).setdefault(res, 0)
         e2e_results[name][res] += 1
         if sig is None:
             continue
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
-        if t is None:
+        if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
+                and t_sim is not None:
+            # the estimate's own time, on the fix clock: the time with that
+            # FixTime nearest to where the bus clock puts it (predict-only
+            # steps may run seconds past inputs that come late; an estimator
+            # may lag): within half a wrap of that
+            expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
+            d = (int(sig["EstTime"]) - fix_in - expect_ms) % FIX_TIME_WRAP_MS
+            if d > FIX_TIME_WRAP_MS / 2:
+                d -= FIX_TIME_WRAP_MS
+            t_est = t_sim + (expect_ms + d) / 1000.0
+            if pending is not None:
+                series[EST_STATE].append((t_est, pending[2]))
+                n_dated += 1
+                pending = None
+            series[name].append((t_est, sig))
             continue
-        if align == "inputs" and name == EST_STATE and t_in is not None and m.timestamp - t_in > max_age:
+        if pending is not None:
+            keep(EST_STATE, *pending)
+            pending = None
+        if name == EST_STATE:
+            pending = (t, m.timestamp, sig)
             continue
-        series[name].append((t, sig))
+        keep(name, t, m.timestamp, sig)
+    if pending is not None:
+        keep(EST_STATE, *pending)
+    series["dated_by_est_time"] = n_dated
     return series, e2e_results
+
+
+def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
+    """The recorded position frames' fix times (Position.FixTime) against
+    their receive stamps: how many carry one, the rate of the receive clock
+    per fix-clock second (1 / replay speed) and the receive jitter, in ms of
+    the fix clock (the error a receiver that dates fixes on receipt makes).
+    Only E2E-accepted frames count."""
+    codec = FrameCodec(dbc, timeout_s=math.inf)
+    pos_id = codec.message(POSITION).frame_id
+    rx, fix = [], []
+    for m in rec_msgs:
+        if m.arbitration_id != pos_id or m.is_error_frame:
+            continue
+        _, sig, _ = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
+        if sig is not None and sig.get("FixTimeValid", 0) >= 0.5 and sig["PosValid"] >= 0.5:
+            rx.append(m.timestamp)
+            fix.append(int(sig["FixTime"]))
+    out: dict = {"fix_time_frames": len(fix)}
+    if len(fix) < 3:
+        return out
+    d = np.diff(np.array(fix, dtype=np.int64)) % FIX_TIME_WRAP_MS
+    d = np.where(d > FIX_TIME_WRAP_MS // 2, d - FIX_TIME_WRAP_MS, d)  # consecutive fixes: within half a wrap
+    fix_u = np.concatenate(([0], np.cumsum(d))).astype(float)  # ms
+    b, a = np.polyfit(fix_u, np.array(rx), 1)
+    if not b > 0:
+        return out
+    lat = (np.array(rx) - (a + b * fix_u)) / b  # ms of the fix clock
+    lat -= np.min(lat)  # latency above the least one seen
+    out["rx_s_per_fix_s"] = round(float(b * 1000.0), 9)
+    out["rx_latency_ms"] = {k: round(float(v), 3) for k, v in
+                            (("p50", np.percentile(lat, 50)), ("p99", np.percentile(lat, 99)), ("max", np.max(lat)))}
+    return out
 
 
 def metrics(series, truth) -> dict:
@@ -100,11 +189,22 @@ def metrics(series, truth) -> dict:
         ev = spd - np.interp(t, tt, truth["speed_mps"])
         res.update(position_rms_m=float(np.sqrt(np.mean(ep**2))), speed_rms_mps=float(np.sqrt(np.mean(ev**2))),
                    state_frames=len(st))
+        # EstQuality goes out with each EstState: the 95 % intervals' coverage
+        qt = {t: s for t, s in series[EST_QUALITY] if s["QualValid"] >= 0.5}
+        both = [(i, qt[ti]) for i, ti in enumerate(t) if ti in qt]
+        if both:
+            idx = np.array([i for i, _ in both])
+            psd = np.array([q["PositionSd"] for _, q in both])
+            vsd = np.array([q["SpeedSd"] for _, q in both])
+            res["quality_frames"] = len(both)
+            res["position_95_coverage"] = float(np.mean(np.abs(ep[idx]) <= 1.96 * psd))
+            res["speed_95_coverage"] = float(np.mean(np.abs(ev[idx]) <= 1.96 * vsd))
+            res["position_sd_median_m"] = float(np.median(psd))
     ty = series[EST_TYPE]
     declared, decision = None, None
     if ty:
         last = int(ty[-1][1]["DeclaredType"])
-        res["final_status"] = ["undecided", "declared", "changed"][min(int(ty[-1][1]["TypeStatus"]), 2)]
+        res["final_status"] = STATUS_NAMES[min(int(ty[-1][1]["TypeStatus"]), len(STATUS_NAMES) - 1)]
         res["final_leader"] = type_name(int(ty[-1][1]["LeaderType"]))
         res["final_leader_weight"] = float(ty[-1][1]["LeaderWeight"])
         if last != TYPE_NONE:
@@ -130,14 +230,58 @@ def metrics(series, truth) -> dict:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
                 res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true), axis=0).tolist()
-    for name in (HEALTH_RX, HEALTH_SYS):
+    for name in (HEALTH_RX, HEALTH_SYS, HEALTH_TIME):
         if series[name]:
             s = series[name][-1][1]
             res.setdefault("health", {}).update({k: int(v) for k, v in s.items() if not k.startswith("E2e")})
     return res
 
 
-def plots(series, truth, outdir: Path) -> List[str]:
+def sd_series(series, pattern: str) -> Optional[Tuple[np.ndarray, np.ndarray]]:
+    """(times, sd) of the first output signal whose name matches `pattern`
+    (case-insensitive), in whichever estimator frame carries it; None when
+    no frame does or it never holds a positive sd (not yet published)."""
+    rx = re.compile(pattern, re.I)
+    for rows in series.values():
+        if not rows:
+            continue
+        sig = next((k for k in rows[0][1] if rx.fullmatch(k)), None)
+        if sig is None:
+            continue
+        t = np.array([r[0] for r in rows])
+        sd = np.array([float(r[1][sig]) for r in rows])
+        ok = np.isfinite(sd) & (sd > 0)
+        if ok.any():
+            return t[ok], sd[ok]
+    return None
+
+
+SD_SIGNALS = {  # signal-name patterns of the published standard deviations
+    "position": r"(est)?pos(ition)?_?sd(_?m)?", "speed": r"(est)?(speed|spd)_?sd(_?mps)?",
+    "c0": r"(est)?c0_?sd", "c1": r"(est)?c1_?sd", "c2": r"(est)?c2_?sd",
+}
+
+
+def run_title(truth) -> str:
+    """The run's identity for plot titles: true type, seed, noise (profile)."""
+    i = truth.get("identity", {})
+    parts = [f"truth {i.get('type', truth['theta'].name)}"]
+    parts += [f"{k} {i[k]}" for k in ("seed", "noise", "profile") if k in i]
+    return ", ".join(parts)
+
+
+def _mark_decision(ax, decision: Optional[float], declared: Optional[str], label: bool = True) -> None:
+    if decision is not None:
+        ax.axvline(decision, color="tab:red", ls=":", lw=1.2,
+                   label=f"declared {declared} at {decision:.0f} s" if label else None)
+
+
+def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Optional[float] = None,
+          declared: Optional[str] = None) -> List[str]:
+    """PNGs of the run: states (with 95 % bands when the estimator publishes
+    sd), model weights with the declaration threshold of `rule`
+    (runconfig.declaration), Davis coefficients and W(v). The decision time
+    is marked on every time axis; titles name the run."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -147,18 +291,30 @@ def plots(series, truth, outdir: Path) -> List[str]:
     files = []
     th_true: Theta = truth["theta"]
     tt = truth["time_s"]
+    who = run_title(truth)
+    rule = rule or {}
     st = [(t, s) for t, s in series[EST_STATE] if s["EstValid"] >= 0.5]
     if st:
         t = np.array([x[0] for x in st])
         fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8)
-        ax[0].set_ylabel("position error (m)")
+        ax[0].plot(t, np.array([x[1]["EstPosition"] for x in st]) - np.interp(t, tt, truth["position_m"]), lw=0.8,
+                   label="estimate - truth")
         ax[1].plot(tt, truth["speed_mps"] * 3.6, label="true", lw=1.2)
-        ax[1].plot(t, np.array([x[1]["EstSpeed"] for x in st]) * 3.6, label="estimate", lw=0.8)
+        v_est = np.array([x[1]["EstSpeed"] for x in st]) * 3.6
+        ax[1].plot(t, v_est, label="estimate", lw=0.8)
+        for a, key, centre, scale in ((ax[0], "position", np.zeros_like(t), 1.0), (ax[1], "speed", v_est, 3.6)):
+            sd = sd_series(series, SD_SIGNALS[key])
+            if sd is not None:
+                band = Z95 * scale * np.interp(t, *sd)
+                a.fill_between(t, centre - band, centre + band, color="tab:blue", alpha=0.2, lw=0,
+                               label="95 % band of the estimate")
+        for a in ax:
+            _mark_decision(a, decision, declared)
+            a.legend(fontsize=8)
+        ax[0].set_ylabel("position error (m)")
         ax[1].set_ylabel("speed (km/h)")
         ax[1].set_xlabel("time (s)")
-        ax[1].legend()
-        fig.suptitle("State estimate vs truth")
+        fig.suptitle(f"State estimate vs truth ({who})")
         files.append(_save(fig, outdir / "states.png"))
     if series[EST_TYPE]:
         t = np.array([x[0] for x in series[EST_TYPE]])
@@ -168,12 +324,16 @@ def plots(series, truth, outdir: Path) -> List[str]:
         for idx in sorted(set(lead.tolist())):
             sel = lead == idx
             ax.plot(t[sel], lw[sel], ".", ms=3, label=f"leader {type_name(idx)}")
-        ax.axhline(0.9, color="grey", ls="--", lw=0.8)
+        if rule.get("threshold") is not None:
+            hold = f", held {rule['hold_s']:g} s" if rule.get("hold_s") is not None else ""
+            ax.axhline(rule["threshold"], color="grey", ls="--", lw=0.8,
+                       label=f"declaration: q > {rule['threshold']:g}{hold} ({rule.get('source', '?')})")
+        _mark_decision(ax, decision, declared)
         ax.set_ylim(0, 1.05)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("model weight q")
-        ax.set_title(f"Leading model weight (truth {th_true.name})")
-        ax.legend()
+        ax.set_title(f"Leading model weight ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "weights.png"))
     thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
     if thf:
@@ -181,21 +341,31 @@ def plots(series, truth, outdir: Path) -> List[str]:
         fig, ax = plt.subplots(figsize=(9, 4))
         for k, c in (("C0", th_true.c0), ("C1", th_true.c1), ("C2", th_true.c2)):
             ax.plot(t, 100 * (np.array([x[1][k] for x in thf]) - c) / c, label=k.lower())
-        ax.axhspan(-5, 5, color="green", alpha=0.1)
+        ax.axhspan(-5, 5, color="green", alpha=0.1, label="+-5 %")
+        _mark_decision(ax, decision, declared)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("relative error (%)")
-        ax.set_title("Estimated Davis coefficients")
-        ax.legend()
+        ax.set_title(f"Estimated Davis coefficients ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "theta.png"))
         s = thf[-1][1]
         est = Theta("estimate", s["C0"], s["C1"], s["C2"])
         fig, ax = plt.subplots(figsize=(7, 4))
-        ax.plot(V_GRID_KMH, th_true.resistance(V_GRID_KMH / 3.6), label=f"true ({th_true.name})")
-        ax.plot(V_GRID_KMH, est.resistance(V_GRID_KMH / 3.6), "--", label="estimate (final)")
+        vk = V_GRID_KMH
+        ax.plot(vk, th_true.resistance(vk / 3.6), label=f"true ({th_true.name})")
+        w_est = est.resistance(vk / 3.6)
+        ax.plot(vk, w_est, "--", label="estimate (final)")
+        sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
+        if all(x is not None for x in sds):
+            # final sd of each coefficient; their covariances are not published, so this band treats
+            # them as independent: var W = sum_k (V^k sd_k)^2
+            band = Z95 * np.sqrt(sum((vk ** k * x[1][-1]) ** 2 for k, x in enumerate(sds)))
+            ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
+                            label="95 % band (coefficients independent)")
         ax.set_xlabel("speed (km/h)")
         ax.set_ylabel("W (N/kN)")
-        ax.set_title("Running resistance")
-        ax.legend()
+        ax.set_title(f"Running resistance ({who})")
+        ax.legend(fontsize=8)
         files.append(_save(fig, outdir / "resistance.png"))
     return files
 
@@ -210,17 +380,21 @@ def _save(fig, path: Path) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
-                                epilog=__doc__.split("\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("log", help="recorded log with the estimator's frames")
+    p = cli.Parser(prog="hstpf-score", description="Score recorded estimator frames against the truth.",
+                   epilog=__doc__.split("\n", 2)[2] + "\nExit codes: 0 done, 2 usage, 3 an input cannot be read "
+                   "or is not valid, 5 no estimator frame in the log, 6 an output cannot be written (docs/tools.md).",
+                   formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("log", help="recorded log with the estimator's frames; '-': candump text on stdin")
     p.add_argument("--truth", required=True, help="truth CSV from hstpf-simulate")
     p.add_argument("--input-log", help="the simulated input log (for --align inputs)")
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
     p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
-    p.add_argument("--json", help="write the metrics as JSON here ('-' for stdout)")
+    cli.add_json_argument(p, what="the metrics as JSON", default=" (the table then goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
+    p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
+                   "are drawn on the weights plot (default: the library's defaults)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
     return p
 
@@ -233,43 +407,67 @@ def _fmt(v) -> str:
     return str(v)
 
 
-def main(argv=None) -> int:
+def _main(argv) -> int:
     a = build_parser().parse_args(argv)
     align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
     if align == "inputs" and not a.input_log:
-        print("hstpf-score: --align inputs needs --input-log", file=sys.stderr)
-        return 2
-    codec = FrameCodec(a.dbc, timeout_s=math.inf)
+        raise cli.CliError(cli.EXIT_USAGE, "--align inputs needs --input-log")
+    if a.speed <= 0:
+        raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
+    if [a.log, a.input_log, a.truth].count("-") > 1:
+        raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
+    try:
+        codec = FrameCodec(a.dbc, timeout_s=math.inf)
+    except Exception as exc:  # missing or unreadable DBC
+        raise cli.input_error(a.dbc or "the DBC", exc) from exc
     input_map: Dict[bytes, float] = {}
     if align == "inputs":
-        inp = read_log(a.input_log)
+        inp = cli.load_log(a.input_log)
         pos_id = codec.message(POSITION).frame_id
         t_first = inp[0].timestamp if inp else 0.0
         for m in inp:
             if m.arbitration_id == pos_id:
                 input_map.setdefault(bytes(m.data), m.timestamp - t_first)
-    truth = read_truth(a.truth)
-    series, e2e_res = collect(read_log(a.log), codec, align, input_map, a.t0, a.speed)
+    try:
+        truth = read_truth(a.truth)
+    except (KeyError, ValueError, IndexError) as exc:
+        raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
+    rec = cli.load_log(a.log)
+    series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
     res = metrics(series, truth)
+    res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
     res["output_e2e"] = e2e_res
+    res["state_frames_dated"] = series.pop("dated_by_est_time")
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
-        res["plots"] = plots(series, truth, Path(a.plots))
+        try:
+            rule = runconfig.declaration(a.config)
+            res["plots"] = plots(series, truth, Path(a.plots), rule, res.get("decision_time_s"),
+                                 res.get("declared_type"))
+        except OSError as exc:
+            raise cli.output_error(a.plots, exc) from exc
+    table = sys.stderr if a.json == "-" else sys.stdout  # '--json -': nothing but JSON on stdout
     for k, v in res.items():
-        if k not in ("output_e2e", "health", "frames"):
-            print(f"{k:38s} {_fmt(v)}")
+        if k not in ("output_e2e", "health", "frames", "inputs"):
+            print(f"{k:38s} {_fmt(v)}", file=table)
     if "health" in res:
-        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()))
+        print("health".ljust(38), " ".join(f"{k}={v}" for k, v in res["health"].items()), file=table)
+    if "inputs" in res:
+        print("inputs".ljust(38), json.dumps(res["inputs"]), file=table)
     bad = {n: {r: c for r, c in d.items() if r not in e2e.ACCEPTED} for n, d in e2e_res.items()}
-    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}))
+    print("output_e2e_rejected".ljust(38), json.dumps({n: d for n, d in bad.items() if d}), file=table)
     if a.json:
-        text = json.dumps(res, indent=1)
-        if a.json == "-":
-            print(text)
-        else:
-            Path(a.json).write_text(text + "\n")
-    return 0
+        cli.emit_report(res, a.json)
+    if not any(res["frames"].values()):
+        print(f"hstpf-score: no estimator frame in {a.log}" + (" could be timed by its inputs"
+              if align == "inputs" and e2e_res else ""), file=sys.stderr)
+        return cli.EXIT_NO_TRAFFIC
+    return cli.EXIT_OK
+
+
+def main(argv=None) -> int:
+    return cli.run("hstpf-score", _main, argv)
 
 
 if __name__ == "__main__":

@@ -1,24 +1,27 @@
 """hstpf-simulate: a run of the model as a candump log plus a truth CSV."""
 import argparse
 import csv
-import json
+import io
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from . import model
+from . import cli, model
 from .frames import FrameCodec, TABLE1
 from .logio import input_frames, write_log
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = cli.Parser(
         prog="hstpf-simulate",
         description="Simulate the train model and write E2E-protected position and traction frames "
         "(candump log) and the ground truth (CSV). Model step T on a grid; frames every "
         "--frame-period: position interpolated linearly between grid points plus fresh noise e, "
-        "traction held over each step.",
+        "traction held over each step. Each position frame carries its fix time (Position.FixTime): "
+        "--t0 + the frame's simulation time, ms modulo 8192. Prints a JSON report.",
+        epilog="Exit codes: 0 done, 2 usage, 3 an input file (--track, --dbc) cannot be read, 6 an output "
+        "cannot be written (docs/tools.md).",
     )
     g = p.add_mutually_exclusive_group()
     g.add_argument("--type", help="Table 1 type (default CRH3): " + ", ".join(r[0] for r in TABLE1))
@@ -38,9 +41,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gamma", type=float, default=0.06, help="rotating-mass factor (0.06)")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0, s (0)")
     p.add_argument("--channel", default="vcan0", help="channel name written in the log (vcan0)")
+    p.add_argument("--no-fix-time", action="store_true",
+                   help="position frames without their fix time (an older sender: the receiver dates them on receipt)")
     p.add_argument("--dbc", help="DBC file (default port/dbc/hstpf.dbc)")
-    p.add_argument("-o", "--out", default="run.log", help="candump log to write (run.log)")
-    p.add_argument("--truth", help="truth CSV (default: <out stem>_truth.csv)")
+    p.add_argument("-o", "--out", default="run.log", help="candump log to write (run.log); '-': stdout")
+    p.add_argument("--truth", help="truth CSV (default: <out stem>_truth.csv; needed with -o -); '-': stdout")
+    cli.add_json_argument(p, default=" (default: stdout, or stderr when -o or --truth is '-')")
     return p
 
 
@@ -55,48 +61,71 @@ def noise_from_args(a):
     return ws, wv, e
 
 
-def write_truth(path, run: model.Run, mass_t: float) -> None:
+def write_truth(path, run: model.Run, mass_t: float, identity=("", "", "")) -> None:
+    """The truth CSV; identity = (seed, noise, profile), repeated per row so
+    that a reader of any row (hstpf-score's plot titles) knows the run."""
     th = run.theta
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["time_s", "position_m", "speed_mps", "traction_nkn", "force_kn", "track_nkn", "phase", "c0", "c1", "c2", "type"])
-        for k in range(len(run.t)):
-            w.writerow([
-                f"{run.t[k]:.6f}", f"{run.s[k]:.6f}", f"{run.v[k]:.6f}", f"{run.u[k]:.6f}",
-                f"{model.force_kn(run.u[k], mass_t):.6f}", f"{run.g[k]:.6f}", run.phase[k],
-                repr(th.c0), repr(th.c1), repr(th.c2), th.name,
-            ])
+    f = io.StringIO()  # one write at the end: '-' (stdout) or a file, errors as exit 6
+    w = csv.writer(f)
+    w.writerow(["time_s", "position_m", "speed_mps", "traction_nkn", "force_kn", "track_nkn", "phase", "c0", "c1", "c2",
+                "type", "seed", "noise", "profile"])
+    for k in range(len(run.t)):
+        w.writerow([
+            f"{run.t[k]:.6f}", f"{run.s[k]:.6f}", f"{run.v[k]:.6f}", f"{run.u[k]:.6f}",
+            f"{model.force_kn(run.u[k], mass_t):.6f}", f"{run.g[k]:.6f}", run.phase[k],
+            repr(th.c0), repr(th.c1), repr(th.c2), th.name, *identity,
+        ])
+    cli.write_text(str(path), f.getvalue())
 
 
-def main(argv=None) -> int:
+def _main(argv) -> int:
     a = build_parser().parse_args(argv)
     try:
         theta = (model.theta_for(None, [float(x) for x in a.coeffs.split(",")]) if a.coeffs
                  else model.theta_for(a.type or "CRH3"))
         ws, wv, e = noise_from_args(a)
-        track = model.Track.from_csv(a.track) if a.track else None
-        if a.frame_period <= 0 or a.mass_t <= 0:
-            raise ValueError("--frame-period and --mass-t must be > 0")
+        if a.frame_period <= 0 or a.mass_t <= 0 or a.dt <= 0 or a.duration <= 0:
+            raise ValueError("--frame-period, --mass-t, --dt and --duration must be > 0")
     except (KeyError, ValueError) as exc:
-        print(f"hstpf-simulate: {exc}", file=sys.stderr)
-        return 2
+        raise cli.CliError(cli.EXIT_USAGE, str(exc).strip("'\"")) from exc
+    if a.out == "-" and not a.truth:
+        raise cli.CliError(cli.EXIT_USAGE, "with -o -, give --truth FILE")
+    cli.check_stdout_once(out=a.out, truth=a.truth, json=a.json)
+    track = None
+    if a.track:
+        try:
+            track = model.Track.from_csv(a.track)
+        except (OSError, KeyError, ValueError) as exc:
+            raise cli.input_error(a.track, exc) from exc
+    try:
+        codec = FrameCodec(a.dbc)
+    except Exception as exc:  # missing or unreadable DBC
+        raise cli.input_error(a.dbc or "the DBC", exc) from exc
     # Separate streams: the trajectory does not change with the frame rate.
     ss = np.random.SeedSequence(a.seed)
     rng_proc, rng_meas = (np.random.default_rng(s) for s in ss.spawn(2))
     run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma)
     tf, y, u = model.sample_frames(run, a.frame_period, e, rng_meas, a.traction_noise_sd)
-    codec = FrameCodec(a.dbc)
-    msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel)
-    Path(a.out).parent.mkdir(parents=True, exist_ok=True)
-    n = write_log(a.out, msgs, a.channel)
+    msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel, fix_time=not a.no_fix_time)
+    try:
+        if a.out != "-":
+            Path(a.out).parent.mkdir(parents=True, exist_ok=True)
+        n = write_log(a.out, msgs, a.channel)
+    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
+        raise cli.output_error(a.out, exc) from exc
     truth = a.truth or str(Path(a.out).with_name(Path(a.out).stem + "_truth.csv"))
-    write_truth(truth, run, a.mass_t)
-    print(json.dumps({
+    noise = a.noise + "".join(f" {k}={v}" for k, v in (("ws", a.ws), ("wv", a.wv), ("e", a.e_noise)) if v)
+    write_truth(truth, run, a.mass_t, (a.seed, noise, a.profile))
+    cli.emit_report({
         "log": a.out, "truth": truth, "frames": n, "steps": len(run.t) - 1, "type": theta.name,
-        "theta": [theta.c0, theta.c1, theta.c2], "profile": a.profile, "seed": a.seed,
+        "theta": [theta.c0, theta.c1, theta.c2], "profile": a.profile, "noise": noise, "seed": a.seed,
         "final_position_m": round(float(run.s[-1]), 3), "final_speed_mps": round(float(run.v[-1]), 3),
-    }))
-    return 0
+    }, a.json, stdout_taken="-" in (a.out, truth))
+    return cli.EXIT_OK
+
+
+def main(argv=None) -> int:
+    return cli.run("hstpf-simulate", _main, argv)
 
 
 if __name__ == "__main__":

@@ -1,12 +1,18 @@
 /* hstpf-mc: Monte Carlo study of the estimator over many independent seeds
  * (simulation and filter seeds separate), per scenario and true type.
  * Prints a table and, with --json, machine-readable results; --trace writes
- * one run's time series for the figures. */
+ * one run's time series for the figures. Journey scenarios (station stops,
+ * a day, a start at speed, clock steps, an outage, a traction-gain bias)
+ * print their own table (docs/results.md). */
+#define _POSIX_C_SOURCE 200112L
+
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "hstpf/hstpf.h"
 #include "hstpf_sim.h"
@@ -22,7 +28,41 @@ typedef struct {
     double duration_s;
     int hilly;                  /* simulate on the hilly track */
     int filter_knows_track;     /* give the track profile to the filter */
+    /* journeys (zero for the others) */
+    const struct timetable *tt; /* the truth runs this timetable (profile JOURNEY) */
+    double clock_step_s;        /* receive-clock step at clock_at_s, s (0 = none) */
+    double clock_at_s;
+    int outage;                 /* GNSS outage of 20-60 s during an acceleration */
+    double gain_bias;           /* traction reported = (1 + gain_bias) x applied */
 } scenario_t;
+
+typedef struct timetable {
+    const hstpf_sim_leg_t *legs;
+    uint16_t n_legs;
+    double first_dwell_s;       /* standing at the origin first; < 0: start running */
+    double v0_kmh;              /* speed at the first fix */
+} timetable_t;
+
+#define MAX_STOPS 24
+#define OUTAGE_LEG 1            /* the outage starts OUTAGE_AFTER_S into this leg's run */
+#define OUTAGE_AFTER_S 100.0    /* accelerating at HSTPF_SIM_ACCEL, ~40 m/s */
+
+/* Journey metrics of one run (docs/results.md explains each). */
+typedef struct {
+    int false_at_rest;          /* the first false declaration's hold window saw the truth standing */
+    int false_outside_pair;     /* a type outside the truth's near-identical pair was declared */
+    int n_stops;
+    double tv[MAX_STOPS];       /* total-variation change of q from rest to departure, per stop */
+    double v_min_rest;          /* lowest speed estimate while the truth stood */
+    double pe10;                /* |position error| 10 s after the event (first fix, clock step) */
+    double pe_max_after;        /* max |position error| after that */
+    uint32_t outliers, reacquired, acquisitions;
+    long cover_p, cover_v, n_cover; /* steps inside the 95 % intervals, steps counted */
+    long assert_fail;           /* steps where declared, status and theta disagree */
+    double outage_s;            /* outage length drawn for this run, s */
+    long out_cover_p, out_cover_v, n_out; /* the same, outage steps only */
+    double out_pe_max;          /* max |position error| during the outage */
+} journey_t;
 
 /* Filter settings under study: the same for every scenario and truth. */
 typedef struct {
@@ -47,6 +87,7 @@ typedef struct {
     double pos_bias;            /* mean signed position error (estimate - truth), same span */
     uint32_t floor_hits_true;
     double q_true_end;
+    journey_t j;
 } run_t;
 
 typedef struct {
@@ -59,8 +100,10 @@ typedef struct {
     int seeds;
     run_t *runs;                /* n_jobs * seeds */
     int next;                   /* job counter, under lock */
+    int done;                   /* runs finished, under lock */
     pthread_mutex_t lock;
-    const char *trace_path;     /* first run of the first job */
+    const char *trace_path;     /* run of trace_seed of the first job */
+    int trace_seed;
 } work_t;
 
 static const hstpf_track_seg_t hilly_track[] = {
@@ -86,6 +129,55 @@ static double w_rms_rel(const double th[3], const hstpf_theta_t *truth)
     return sqrt(acc / 71.0);
 }
 
+/* The near-identical pairs of Table 1: 0, 1, 2, or -1 for the others. */
+static int pair_of(const char *name)
+{
+    static const char *pairs[3][2] = {
+        {"CRH2", "CRH3"}, {"Star EMU Central Plains", "China Star"}, {"SS8", "ND5"}};
+    int i;
+    for (i = 0; name != NULL && i < 3; ++i) {
+        if (!strcmp(name, pairs[i][0]) || !strcmp(name, pairs[i][1])) {
+            return i;
+        }
+    }
+    return -1;
+}
+
+static int in_pair(const hstpf_theta_t *models, int truth, int m)
+{
+    const int p = pair_of(models[truth].name);
+    return m == truth || (p >= 0 && pair_of(models[m].name) == p);
+}
+
+/* The header's contract: status DECLARED/CHANGED <=> declared >= 0, and a
+ * declared type publishes its own row's theta (relative 1e-6). */
+static int decl_consistent(const hstpf_estimate_t *e, const hstpf_theta_t *models, int n)
+{
+    const int by_status = e->status == HSTPF_STATUS_DECLARED || e->status == HSTPF_STATUS_CHANGED;
+    int k;
+    if (by_status != (e->declared >= 0) || e->declared >= n) {
+        return 0;
+    }
+    for (k = 0; e->declared >= 0 && k < 3; ++k) {
+        const hstpf_theta_t *th = &models[e->declared];
+        const double c = k == 0 ? th->c0 : (k == 1 ? th->c1 : th->c2);
+        if (!(fabs((double)e->theta[k] - c) <= 1e-6 * fabs(c))) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static double tv_dist(const double *a, const hstpf_estimate_t *e, int n)
+{
+    double acc = 0.0;
+    int k;
+    for (k = 0; k < n; ++k) {
+        acc += fabs((double)e->model[k].q - a[k]);
+    }
+    return 0.5 * acc;
+}
+
 static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
 {
     static const double thr = 0.9;
@@ -98,6 +190,12 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     double last_below = 0.0, se_p = 0.0, se_v = 0.0, sb_p = 0.0, n_after = 0.0;
     long n_err = 0;
     int k;
+    /* journey bookkeeping */
+    const timetable_t *tt = w->sc->tt;
+    journey_t *jr = &r->j;
+    double q_rest[MAXM], out_start = -1.0, last_rest_t = -1e9;
+    const double t_event = w->sc->clock_step_s != 0.0 ? w->sc->clock_at_s : 0.0;
+    int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     if (f == NULL) {
         fprintf(stderr, "out of memory\n");
         exit(1);
@@ -107,6 +205,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->t_declare = -1.0;
     r->false_time = -1.0;
     r->false_model = -1;
+    jr->v_min_rest = HUGE_VAL;
+    jr->pe10 = -1.0;
     hstpf_sim_default(&sc);
     sc.truth = w->models[truth];
     sc.profile = w->sc->profile;
@@ -120,6 +220,18 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     }
     /* independent streams: simulation from seed, filter from another */
     sc.seed = 1000003ull * (uint64_t)(truth + 1) + (uint64_t)seed;
+    if (tt) {
+        sc.profile = HSTPF_PROFILE_JOURNEY;
+        sc.legs = tt->legs;
+        sc.n_legs = tt->n_legs;
+        sc.first_dwell_s = tt->first_dwell_s;
+        sc.v0_mps = tt->v0_kmh / 3.6;
+    }
+    if (w->sc->outage) {
+        hstpf_rng_t orng; /* its own stream: the trajectory does not change */
+        (void)hstpf_rng_seed(&orng, sc.seed, 0x0A7Au);
+        jr->outage_s = 20.0 + (double)(hstpf_rng_next(&orng) % 41u); /* 20..60 s */
+    }
     cfg.seed = 0x9E3779B97F4A7C15ull ^ (7919ull * (uint64_t)(truth + 1) + (uint64_t)seed);
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
@@ -136,13 +248,19 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         cfg.track = sc.track;
         cfg.n_track = sc.n_track;
     }
-    if (hstpf_init(f, sizeof *f, &cfg) != HSTPF_OK) {
-        fprintf(stderr, "hstpf_init failed\n");
-        exit(1);
+    {
+        const int32_t rc = hstpf_init(f, sizeof *f, &cfg);
+        if (rc != HSTPF_OK) {
+            const char *field = "";
+            (void)hstpf_config_check(&cfg, &field);
+            fprintf(stderr, "hstpf-mc: hstpf_init failed (%d)%s%s\n", (int)rc, *field ? ": " : "", field);
+            exit(1);
+        }
     }
     hstpf_sim_init(&sim, &sc);
     if (trace) {
-        fprintf(trace, "t,s_true,v_true,u,y,has_y,s_est,v_est,c0,c1,c2,declared");
+        fprintf(trace, "t,s_true,v_true,u,y,has_y,s_est,v_est,c0,c1,c2,declared,status,standstill,valid,"
+                       "pos_sd,spd_sd");
         for (k = 0; k < w->n_models; ++k) {
             fprintf(trace, ",q%d", k);
         }
@@ -152,10 +270,69 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         hstpf_input_t in;
         double qt;
         hstpf_sim_next_input(&sim, &smp, &in);
+        in.traction *= 1.0 + w->sc->gain_bias;
+        if (w->sc->outage && out_start < 0.0 && sim.leg == OUTAGE_LEG &&
+            sim.phase == HSTPF_SIM_RUN && smp.t - sim.phase_t0 >= OUTAGE_AFTER_S) {
+            out_start = smp.t;
+        }
+        if (out_start >= 0.0 && smp.t < out_start + jr->outage_s) {
+            in.has_position = 0;
+            ++jr->n_out;
+        }
+        if (w->sc->clock_step_s != 0.0 && smp.t == w->sc->clock_at_s) {
+            if (w->sc->clock_step_s > 0.0) {
+                /* forward: the daemon dates this step by the stepped clock */
+                in.dt_s += w->sc->clock_step_s;
+            } else {
+                /* backward: the daemon's rule (issue 9) is to detect the
+                 * step, call hstpf_reacquire() and go on with the nominal
+                 * step length: emulated exactly so */
+                (void)hstpf_reacquire(f);
+            }
+        }
         if (hstpf_step(f, &in) != HSTPF_OK) {
             ++n_err;
         }
         (void)hstpf_estimate(f, &est);
+        have_fix |= in.has_position;
+        jr->assert_fail += !decl_consistent(&est, w->models, w->n_models);
+        if (have_fix) {
+            const double ep = est.position_m - smp.s, ev = (double)est.speed_mps - smp.v;
+            jr->cover_p += fabs(ep) <= 1.96 * est.position_sd_m;
+            jr->cover_v += fabs(ev) <= 1.96 * (double)est.speed_sd_mps;
+            ++jr->n_cover;
+            if (!in.has_position && out_start >= 0.0) {
+                jr->out_cover_p += fabs(ep) <= 1.96 * est.position_sd_m;
+                jr->out_cover_v += fabs(ev) <= 1.96 * (double)est.speed_sd_mps;
+                jr->out_pe_max = fabs(ep) > jr->out_pe_max ? fabs(ep) : jr->out_pe_max;
+            }
+            if (smp.t == t_event + 10.0) {
+                jr->pe10 = fabs(ep);
+            } else if (smp.t > t_event + 10.0 && fabs(ep) > jr->pe_max_after) {
+                jr->pe_max_after = fabs(ep);
+            }
+        }
+        if (smp.v == 0.0) {
+            /* the truth stands: from the step it came to rest to the last
+             * step before it departs, every step covers held physics */
+            if (!at_rest) {
+                at_rest = 1;
+                for (k = 0; k < w->n_models; ++k) {
+                    q_rest[k] = (double)est.model[k].q;
+                }
+            }
+            last_rest_t = smp.t;
+            if ((double)est.speed_mps < jr->v_min_rest) {
+                jr->v_min_rest = (double)est.speed_mps;
+            }
+            if (jr->n_stops < MAX_STOPS) {
+                jr->tv[jr->n_stops] = tv_dist(q_rest, &est, w->n_models); /* so far */
+            }
+            at_rest = smp.held ? 2 : at_rest; /* a stop: held at some step (not a clamp at departure) */
+        } else if (at_rest) {
+            jr->n_stops += at_rest == 2 && jr->n_stops < MAX_STOPS;
+            at_rest = 0;
+        }
         qt = (double)est.model[truth].q;
         if (!(qt > thr)) {
             last_below = smp.t;
@@ -164,6 +341,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             r->false_decl = 1;
             r->false_time = est.decision_time_s;
             r->false_model = est.declared;
+            /* the truth stood during the declaration's hold window */
+            jr->false_at_rest = smp.t - last_rest_t <= w->st->base.declare_hold_s;
+        }
+        if (est.declared >= 0 && !in_pair(w->models, truth, est.declared)) {
+            jr->false_outside_pair = 1;
         }
         if (smp.t >= 60.0) {
             se_p += (est.position_m - smp.s) * (est.position_m - smp.s);
@@ -186,9 +368,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             r->t_declare = -1.0;
         }
         if (trace) {
-            fprintf(trace, "%.0f,%.3f,%.4f,%.4f,%.3f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d", smp.t, smp.s,
-                    smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
-                    (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared);
+            fprintf(trace, "%.0f,%.3f,%.4f,%.4f,%.3f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d,%d,%d,%d,%.3f,%.4f", smp.t,
+                    smp.s, smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
+                    (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared,
+                    (int)est.status, est.standstill, est.valid, est.position_sd_m, (double)est.speed_sd_mps);
             for (k = 0; k < w->n_models; ++k) {
                 fprintf(trace, ",%.6g", (double)est.model[k].q);
             }
@@ -199,6 +382,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->pos_rms = sqrt(se_p / n_after);
     r->spd_rms = sqrt(se_v / n_after);
     r->pos_bias = sb_p / n_after;
+    jr->n_stops += at_rest == 2 && jr->n_stops < MAX_STOPS; /* ended standing */
+    jr->outliers = est.outliers;
+    jr->reacquired = est.reacquired;
+    jr->acquisitions = est.acquisitions;
     r->floor_hits_true = est.model[truth].floor_hits;
     r->q_true_end = (double)est.model[truth].q;
     r->success = r->q_true_end > thr;
@@ -231,13 +418,50 @@ static void *worker(void *arg)
         }
         job = idx / w->seeds;
         seed = idx % w->seeds;
-        if (idx == 0 && w->trace_path) {
+        if (job == 0 && seed + 1 == w->trace_seed && w->trace_path) {
             trace = fopen(w->trace_path, "w");
         }
         one_run(w, w->truths[job], seed + 1, &w->runs[idx], trace);
         if (trace) {
             fclose(trace);
         }
+        pthread_mutex_lock(&w->lock);
+        ++w->done;
+        pthread_mutex_unlock(&w->lock);
+    }
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    (void)clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Waits for the workers, with a progress line on stderr: rewritten in place
+ * on a terminal, one line per 10 % otherwise (--progress into a file). */
+static void wait_progress(work_t *w, const char *name, int tty)
+{
+    const int total = w->n_jobs * w->seeds;
+    const double t0 = now_s();
+    const struct timespec nap = {0, 250000000L};
+    int shown = -1, done = 0;
+    while (done < total) {
+        (void)nanosleep(&nap, NULL);
+        pthread_mutex_lock(&w->lock);
+        done = w->done;
+        pthread_mutex_unlock(&w->lock);
+        if (tty || done * 10 / total != shown) {
+            const double el = now_s() - t0;
+            const double left = done > 0 ? el * (double)(total - done) / (double)done : 0.0;
+            shown = done * 10 / total;
+            fprintf(stderr, "%shstpf-mc %s: %d/%d runs, %.0f s, ~%.0f s left%s", tty ? "\r" : "", name,
+                    done, total, el, left, tty ? "   " : "\n");
+            fflush(stderr);
+        }
+    }
+    if (tty) {
+        fprintf(stderr, "\n");
     }
 }
 
@@ -258,22 +482,197 @@ static double pct(double *v, int n, double p)
     return v[i < 0 ? 0 : i];
 }
 
+/* Timetables (the same for every truth and seed): {cruise km/h, run s
+ * from departure to braking, dwell s from rest; -1 = runs to the end}. */
+/* A line of 41 min: 30 s at the origin, 5 stations of 2 min. */
+static const hstpf_sim_leg_t line_legs[] = {
+    {300.0, 250.0, 120.0}, {250.0, 200.0, 120.0}, {300.0, 250.0, 120.0},
+    {200.0, 150.0, 120.0}, {300.0, 200.0, 120.0}};
+static const timetable_t line_tt = {line_legs, 5, 30.0, 0.0};
+/* A day of 4 h: 60 s at the origin, 12 stations of 2 min, runs of 5 to 20
+ * min at 160 to 350 km/h, then a last run to the end of the day. */
+static const hstpf_sim_leg_t day_legs[] = {
+    {300.0, 900.0, 120.0}, {250.0, 600.0, 120.0}, {350.0, 1200.0, 120.0}, {200.0, 400.0, 120.0},
+    {300.0, 800.0, 120.0}, {160.0, 300.0, 120.0}, {300.0, 1000.0, 120.0}, {250.0, 600.0, 120.0},
+    {350.0, 1100.0, 120.0}, {200.0, 500.0, 120.0}, {300.0, 900.0, 120.0}, {250.0, 700.0, 120.0},
+    {300.0, 0.0, -1.0}};
+static const timetable_t day_tt = {day_legs, 13, 60.0, 0.0};
+/* Running at 300 km/h when the filter starts; two stations, then on. */
+static const hstpf_sim_leg_t start300_legs[] = {
+    {300.0, 300.0, 120.0}, {250.0, 400.0, 120.0}, {300.0, 0.0, -1.0}};
+static const timetable_t start300_tt = {start300_legs, 3, -1.0, 300.0};
+
+#define CLOCK_AT_S 1250.0 /* on the line: leg 3 cruising at 300 km/h */
+
 static const scenario_t scenarios[] = {
-    {"paper1", 1, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0},
-    {"paper2", 2, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0},
-    {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0},
-    {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0},
-    {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0},
-    {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0},
-    {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1},
+    {"paper1", 1, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"paper2", 2, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0},
+    {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0},
+    /* journeys: 17 types, Case 1 noise, the holding brake reported at rest */
+    {"stops", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0},
+    {"day", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 14400.0, 0, 0, &day_tt, 0.0, 0.0, 0, 0.0},
+    {"start300", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0},
+    {"clock+30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0},
+    {"clock-30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0},
+    {"outage", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0},
+    {"gain5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.05},
 };
+
+/* Journey table: one row per truth and a total (docs/results.md). */
+static void print_journey(const work_t *w, const hstpf_theta_t *models, const int *truths, int seeds,
+                          FILE *jf)
+{
+    const int all = w->n_jobs * seeds;
+    double *tv_all = malloc(sizeof(double) * (size_t)all * MAX_STOPS);
+    double *pe_all = malloc(sizeof(double) * (size_t)all);
+    int n_tv_all = 0, n_pe_all = 0, j, i, k;
+    long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
+    long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
+    double o_pe = 0.0;
+    double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
+    if (tv_all == NULL || pe_all == NULL) {
+        fprintf(stderr, "out of memory\n");
+        exit(1);
+    }
+    printf("%-23s %6s %4s %4s %6s %5s %5s %6s %6s %6s %6s %6s %6s %6s %7s %5s %5s %5s %6s %6s %5s\n", "truth",
+           "false", "rest", "!pr", "undec", "pair", "stops", "TVmed", "TVmax", "vmin", "W_mean", "W_max",
+           "pe10md", "pe10mx", "pe_max", "outl", "reacq", "acq", "cov_p", "cov_v", "assrt");
+    for (j = 0; j < w->n_jobs; ++j) {
+        const run_t *rr = &w->runs[j * seeds];
+        const int pair = pair_of(models[truths[j]].name) >= 0;
+        double *tv = malloc(sizeof(double) * (size_t)seeds * MAX_STOPS), *pe = malloc(sizeof(double) * (size_t)seeds);
+        int ntv = 0, npe = 0, nf = 0, nr = 0, no = 0, nu = 0, npair = 0;
+        long outl = 0, reacq = 0, cp = 0, cv = 0, n = 0, as = 0;
+        double vmin = HUGE_VAL, wsum = 0.0, wmax = 0.0, pemax = 0.0, acq = 0.0, stops = 0.0;
+        if (tv == NULL || pe == NULL) {
+            fprintf(stderr, "out of memory\n");
+            exit(1);
+        }
+        for (i = 0; i < seeds; ++i) {
+            const run_t *r = &rr[i];
+            const journey_t *q = &r->j;
+            nf += r->false_decl;
+            nr += r->false_decl && q->false_at_rest;
+            no += q->false_outside_pair;
+            nu += r->final_declared < 0;
+            npair += r->final_declared < 0 || in_pair(models, truths[j], r->final_declared);
+            for (k = 0; k < q->n_stops; ++k) {
+                tv[ntv++] = q->tv[k];
+                tv_all[n_tv_all++] = q->tv[k];
+            }
+            stops += q->n_stops;
+            vmin = q->v_min_rest < vmin ? q->v_min_rest : vmin;
+            wsum += r->w_rms;
+            wmax = r->w_rms > wmax ? r->w_rms : wmax;
+            if (q->pe10 >= 0.0) {
+                pe[npe++] = q->pe10;
+                pe_all[n_pe_all++] = q->pe10;
+            }
+            pemax = q->pe_max_after > pemax ? q->pe_max_after : pemax;
+            outl += q->outliers;
+            reacq += q->reacquired;
+            acq += q->acquisitions;
+            cp += q->cover_p;
+            cv += q->cover_v;
+            n += q->n_cover;
+            as += q->assert_fail;
+            o_cp += q->out_cover_p;
+            o_cv += q->out_cover_v;
+            o_n += q->n_out;
+            o_pe = q->out_pe_max > o_pe ? q->out_pe_max : o_pe;
+        }
+        {
+            const double tvmax = pct(tv, ntv, 1.0), pe10max = pct(pe, npe, 1.0);
+            char pair_s[16] = "-";
+            if (pair) {
+                snprintf(pair_s, sizeof pair_s, "%d", npair);
+            }
+            printf("%-23.23s %5.1f%% %4d %4d %5.1f%% %5s %5.1f %6.4f %6.4f %+6.2f %5.2f%% %5.2f%% %6.2f %6.2f %7.1f "
+                   "%5ld %5ld %5.1f %5.1f%% %5.1f%% %5ld\n",
+                   models[truths[j]].name, 100.0 * nf / seeds, nr, no, 100.0 * nu / seeds, pair_s,
+                   stops / seeds, pct(tv, ntv, 0.5), tvmax, vmin, 100.0 * wsum / seeds, 100.0 * wmax,
+                   pct(pe, npe, 0.5), pe10max, pemax, outl, reacq, acq / seeds, 100.0 * (double)cp / (double)n,
+                   100.0 * (double)cv / (double)n, as);
+        }
+        t_false += nf;
+        t_rest += nr;
+        t_out += no;
+        if (pair) {
+            t_pairruns += seeds;
+            t_pairbad += seeds - npair;
+        } else {
+            t_wmean = wsum / seeds > t_wmean ? wsum / seeds : t_wmean;
+            t_wmax = wmax > t_wmax ? wmax : t_wmax;
+        }
+        t_vmin = vmin < t_vmin ? vmin : t_vmin;
+        t_pemax = pemax > t_pemax ? pemax : t_pemax;
+        t_outl += outl;
+        t_reacq += reacq;
+        t_acq += acq;
+        t_cp += cp;
+        t_cv += cv;
+        t_n += n;
+        t_assert += as;
+        if (jf) {
+            fprintf(jf, "%s{\"truth\":\"%s\",\"runs\":[", j ? "," : "", models[truths[j]].name);
+            for (i = 0; i < seeds; ++i) {
+                const run_t *r = &rr[i];
+                const journey_t *q = &r->j;
+                fprintf(jf,
+                        "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
+                        "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
+                        "\"w_rms\":%.5g,\"tv\":[",
+                        i ? "," : "", i + 1, r->false_decl, r->false_time,
+                        r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
+                        q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
+                        r->w_rms);
+                for (k = 0; k < q->n_stops; ++k) {
+                    fprintf(jf, "%s%.4g", k ? "," : "", q->tv[k]);
+                }
+                fprintf(jf,
+                        "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
+                        "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
+                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g}",
+                        q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
+                        (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
+                        q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
+                        q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms);
+            }
+            fprintf(jf, "]}");
+        }
+        free(tv);
+        free(pe);
+    }
+    printf("total: %d runs; false declarations %ld (%.1f%%), %ld from a standstill, %ld outside the pair; "
+           "pairs ending outside the pair %ld of %ld; TV across a stop median %.4f max %.4f; "
+           "speed at rest min %+.3f m/s; W(v) error outside the pairs: worst truth mean %.2f%%, max %.2f%%; "
+           "position error 10 s after the event median %.2f m max %.2f m, later max %.1f m; outliers %ld, "
+           "re-acquisitions (gated) %ld, acquisitions %.2f per run; 95%% coverage position %.1f%% speed "
+           "%.1f%%; declared/status/theta disagreements %ld\n",
+           all, t_false, 100.0 * (double)t_false / all, t_rest, t_out, t_pairbad, t_pairruns,
+           pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
+           pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
+           100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
+    if (o_n > 0) {
+        printf("outage: %ld steps without a fix; 95%% coverage there position %.1f%% speed %.1f%%; "
+               "max |position error| %.1f m\n",
+               o_n, 100.0 * (double)o_cp / (double)o_n, 100.0 * (double)o_cv / (double)o_n, o_pe);
+    }
+    free(tv_all);
+    free(pe_all);
+}
 
 static void usage(void)
 {
     size_t i;
     fprintf(stderr,
             "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
-            "  [--truth NAME] [--json FILE] [--trace FILE]\n"
+            "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
             "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
@@ -299,14 +698,23 @@ int main(int argc, char **argv)
     double duration = -1.0;
     pthread_t th[16];
     FILE *jf = NULL;
-    int tot_s = 0, tot_f = 0, tot_w = 0;
+    int tot_s = 0, tot_f = 0, tot_w = 0, progress = isatty(2);
     double worst_w = 0.0;
 
     memset(&st, 0, sizeof st);
     (void)hstpf_config_default(&st.base);
     memset(&w, 0, sizeof w);
+    w.trace_seed = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--version")) {
+            printf("hstpf-mc %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
+            return 0;
+        }
+        if (!strcmp(a, "--progress")) {
+            progress = progress ? progress : 2; /* 2: asked for, not a terminal */
+            continue;
+        }
         if (v == NULL) {
             usage();
             return 2;
@@ -326,6 +734,8 @@ int main(int argc, char **argv)
             json = v;
         } else if (!strcmp(a, "--trace")) {
             w.trace_path = v;
+        } else if (!strcmp(a, "--trace-seed")) {
+            w.trace_seed = atoi(v);
         } else if (!strcmp(a, "--engine")) {
             if (!strcmp(v, "auto")) {
                 st.base.engine = HSTPF_ENGINE_AUTO;
@@ -424,6 +834,9 @@ int main(int argc, char **argv)
     for (i = 0; i < threads; ++i) {
         pthread_create(&th[i], NULL, worker, &w);
     }
+    if (progress) {
+        wait_progress(&w, sc.name, progress == 1);
+    }
     for (i = 0; i < threads; ++i) {
         pthread_join(th[i], NULL);
     }
@@ -439,6 +852,15 @@ int main(int argc, char **argv)
     }
     printf("scenario %s: %d models, %d seeds, %.0f s, M = %u\n", sc.name, n_models, seeds,
            sc.duration_s, (unsigned)st.base.n_particles);
+    if (sc.tt) {
+        print_journey(&w, models, truths, seeds, jf);
+        if (jf) {
+            fprintf(jf, "]}\n");
+            fclose(jf);
+        }
+        free(w.runs);
+        return 0;
+    }
     printf("%-24s %7s %7s %7s %7s %7s %6s %6s %7s %7s %5s %7s %7s %8s\n", "truth", "success", "x_med",
            "x_p90", "x_max", "t_med", "false", "undec", "c_err", "W_rms", "W>5%", "pos_rms", "spd_rms", "pos_bias");
     for (j = 0; j < w.n_jobs; ++j) {

@@ -86,6 +86,7 @@ void hstpf_sim_default(hstpf_sim_config_t *c)
     c->profile = HSTPF_PROFILE_PAPER;
     c->dt_s = 1.0;
     c->seed = 1;
+    c->hold_brake = HSTPF_SIM_HOLD_BRAKE;
 }
 
 void hstpf_sim_init(hstpf_sim_t *sim, const hstpf_sim_config_t *c)
@@ -93,6 +94,10 @@ void hstpf_sim_init(hstpf_sim_t *sim, const hstpf_sim_config_t *c)
     memset(sim, 0, sizeof *sim);
     sim->cfg = *c;
     sim->xi = 9.81 / (1.0 + c->gamma_rot) / 1000.0;
+    sim->v = c->v0_mps > 0.0 ? c->v0_mps : 0.0;
+    sim->leg = c->first_dwell_s >= 0.0 ? -1 : 0;
+    sim->phase = sim->leg < 0 ? HSTPF_SIM_DWELL : HSTPF_SIM_RUN;
+    sim->phase_t0 = sim->leg < 0 && sim->v > 0.0 ? -1.0 : 0.0;
     (void)hstpf_rng_seed(&sim->rng, c->seed, SIM_STREAM);
 }
 
@@ -145,6 +150,47 @@ double hstpf_sim_accel_cmd(hstpf_profile_t p, double t, double v, int *coast)
     }
 }
 
+/* The journey's commanded acceleration at the current sample (advancing the
+ * timetable); *hold set while standing (the holding brake is reported). */
+static double journey_accel(hstpf_sim_t *sim, int *hold)
+{
+    const hstpf_sim_config_t *c = &sim->cfg;
+    *hold = 0;
+    if (sim->phase == HSTPF_SIM_DWELL) {
+        const double dwell = sim->leg < 0 ? c->first_dwell_s : c->legs[sim->leg].dwell_s;
+        if (sim->phase_t0 < 0.0 && sim->v == 0.0) {
+            sim->phase_t0 = sim->t; /* came to rest: the dwell starts */
+        }
+        if (sim->phase_t0 < 0.0 || sim->t - sim->phase_t0 < dwell || sim->leg + 1 >= (int)c->n_legs) {
+            *hold = 1;
+            return 0.0;
+        }
+        ++sim->leg; /* depart */
+        sim->phase = HSTPF_SIM_RUN;
+        sim->phase_t0 = sim->t;
+    }
+    if (sim->phase == HSTPF_SIM_RUN) {
+        const hstpf_sim_leg_t *l = &c->legs[sim->leg];
+        if (l->dwell_s < 0.0 || sim->t - sim->phase_t0 < l->run_s) {
+            return track_to(KMH(l->cruise_kmh), sim->v, HSTPF_SIM_ACCEL, HSTPF_SIM_BRAKE);
+        }
+        sim->phase = HSTPF_SIM_BRAKING;
+    }
+    if (sim->v > HSTPF_SIM_BRAKE * c->dt_s) {
+        return -HSTPF_SIM_BRAKE;
+    }
+    /* the next step would stop the train: the holding brake from here */
+    sim->phase = HSTPF_SIM_DWELL;
+    sim->phase_t0 = sim->v == 0.0 ? sim->t : -1.0;
+    *hold = 1;
+    return 0.0;
+}
+
+int hstpf_sim_held(const hstpf_theta_t *truth, double v, double u, double g)
+{
+    return v == 0.0 && u - truth->c0 - g <= 0.0;
+}
+
 double hstpf_sim_track(const hstpf_sim_config_t *c, double s)
 {
     double g = 0.0;
@@ -161,11 +207,15 @@ void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *o)
     const hstpf_sim_config_t *c = &sim->cfg;
     const double w = hstpf_resistance(&c->truth, sim->v);
     const double g = hstpf_sim_track(c, sim->s);
-    int coast;
-    const double acmd = hstpf_sim_accel_cmd(c->profile, sim->t, sim->v, &coast);
-    double a, vd;
+    int coast = 0, hold = 0;
+    double a, ws, wv;
+    if (c->profile == HSTPF_PROFILE_JOURNEY && c->n_legs > 0u) {
+        a = journey_accel(sim, &hold);
+    } else {
+        a = hstpf_sim_accel_cmd(c->profile, sim->t, sim->v, &coast);
+    }
     /* traction that gives the commanded acceleration at the true state */
-    o->u = coast ? 0.0 : acmd / sim->xi + w + g;
+    o->u = hold ? c->hold_brake : (coast ? 0.0 : a / sim->xi + w + g);
     if (o->u > HSTPF_U_MAX) {
         o->u = HSTPF_U_MAX;
     } else if (o->u < -HSTPF_U_MAX) {
@@ -176,14 +226,16 @@ void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *o)
     o->v = sim->v;
     o->y = sim->s + hstpf_sim_noise(&sim->rng, &c->noise_e);
     o->has_y = !(c->loss_rate > 0.0 && u01(&sim->rng) < c->loss_rate);
-    /* the model of the filter, with the true coefficients */
-    a = sim->xi * (o->u - w - g);
-    vd = sim->v + c->dt_s * a;
-    if (sim->v >= 0.0 && vd < 0.0) {
-        vd = 0.0;
+    o->held = hstpf_sim_held(&c->truth, sim->v, o->u, g);
+    /* drawn on every step, so the stream does not depend on the stops */
+    ws = hstpf_sim_noise(&sim->rng, &c->noise_s);
+    wv = hstpf_sim_noise(&sim->rng, &c->noise_v);
+    if (!o->held) {
+        /* the model of the filter, with the true coefficients */
+        const double vd = sim->v + c->dt_s * sim->xi * (o->u - w - g) + wv;
+        sim->s += c->dt_s * sim->v + ws;
+        sim->v = vd > 0.0 ? vd : 0.0;
     }
-    sim->s += c->dt_s * sim->v + hstpf_sim_noise(&sim->rng, &c->noise_s);
-    sim->v = vd + hstpf_sim_noise(&sim->rng, &c->noise_v);
     sim->t += c->dt_s;
     ++sim->k;
 }

@@ -1,7 +1,14 @@
 /* Host-side simulator of the paper's train model (Eq. 6-7), for the demo,
  * the Monte Carlo study and the tests. Double precision, exact noise
  * samplers (Box-Muller, Marsaglia-Tsang), its own RNG stream: independent of
- * the filter's tables and streams. */
+ * the filter's tables and streams.
+ *
+ * Truth physics per step T (tools/hstpf_tools/model.py does the same):
+ *   held:   v == 0 and xi (u - c0 - g) <= 0 (nothing can start the train,
+ *           e.g. the holding brake or u = 0 at a platform): s' = s, v' = 0,
+ *           no process noise (a standing train does not random-walk);
+ *   else:   s' = s + T v + w_s,  v' = max(0, v + T xi (u - W(v) - g) + w_v)
+ *           (a train never reverses). */
 #ifndef HSTPF_SIM_H
 #define HSTPF_SIM_H
 
@@ -10,8 +17,32 @@
 typedef enum {
     HSTPF_PROFILE_PAPER = 0,       /* 0 -> 350 km/h at 0.2455 m/s^2, then cruise */
     HSTPF_PROFILE_COAST_BRAKE = 1, /* accelerate, cruise, coast, brake, again */
-    HSTPF_PROFILE_STOPS = 2        /* runs between station stops */
+    HSTPF_PROFILE_STOPS = 2,       /* runs between station stops */
+    HSTPF_PROFILE_JOURNEY = 3      /* the legs of a timetable (hstpf_sim_leg_t) */
 } hstpf_profile_t;
+
+/* One leg of a journey: depart (or start), run at cruise_kmh (accelerate at
+ * HSTPF_SIM_ACCEL, hold the speed), brake at HSTPF_SIM_BRAKE from run_s after
+ * the departure until the train stands, then dwell dwell_s from the step it
+ * comes to rest, the holding brake applied and reported. dwell_s < 0: the
+ * leg runs to the end of the simulation (no stop). After the last leg's
+ * dwell the train stays held. */
+typedef struct {
+    double cruise_kmh;
+    double run_s;
+    double dwell_s;
+} hstpf_sim_leg_t;
+
+#define HSTPF_SIM_ACCEL 0.4          /* m/s^2, journey traction limit */
+#define HSTPF_SIM_BRAKE 0.5          /* m/s^2, journey service brake */
+#define HSTPF_SIM_HOLD_BRAKE (-50.0) /* N/kN reported while standing */
+
+/* Journey phase of the truth. */
+typedef enum {
+    HSTPF_SIM_DWELL = 0, /* standing (or coming to rest) with the holding brake */
+    HSTPF_SIM_RUN = 1,   /* accelerating or cruising */
+    HSTPF_SIM_BRAKING = 2
+} hstpf_sim_phase_t;
 
 typedef struct {
     hstpf_theta_t truth;
@@ -23,6 +54,12 @@ typedef struct {
     uint64_t seed;
     const hstpf_track_seg_t *track;
     uint16_t n_track;
+    /* HSTPF_PROFILE_JOURNEY: the timetable, read during the run */
+    const hstpf_sim_leg_t *legs;
+    uint16_t n_legs;
+    double first_dwell_s;        /* standing at the origin before leg 0; < 0: start running */
+    double v0_mps;               /* speed at t = 0 (0) */
+    double hold_brake;           /* traction reported while standing (HSTPF_SIM_HOLD_BRAKE) */
 } hstpf_sim_config_t;
 
 typedef struct {
@@ -30,6 +67,7 @@ typedef struct {
     double u;         /* traction applied from this sample to the next, N/kN */
     double y;         /* measured position (valid if has_y) */
     int has_y;
+    int held;         /* the truth is held at rest over the step from this sample */
 } hstpf_sim_sample_t;
 
 typedef struct {
@@ -38,6 +76,10 @@ typedef struct {
     double xi, t, s, v;
     double u_prev;    /* traction of the step just ended */
     uint32_t k;
+    /* journey state */
+    int leg;                     /* current leg; -1 = the first dwell */
+    hstpf_sim_phase_t phase;
+    double phase_t0;             /* when the phase (dwell: the rest) began; -1 = not yet at rest */
 } hstpf_sim_t;
 
 /* The sample at the current time as the filter's input, then advances one
@@ -47,7 +89,8 @@ void hstpf_sim_next_input(hstpf_sim_t *sim, hstpf_sim_sample_t *smp, hstpf_input
 /* Paper Case 1 / Case 2 noise into a config (truth and profile untouched). */
 void hstpf_sim_case1(hstpf_sim_config_t *c);
 void hstpf_sim_case2(hstpf_sim_config_t *c);
-/* Defaults: CRH3, paper profile, Case 1 noise, dt 1 s, seed 1. */
+/* Defaults: CRH3, paper profile, Case 1 noise, dt 1 s, seed 1, holding
+ * brake HSTPF_SIM_HOLD_BRAKE. */
 void hstpf_sim_default(hstpf_sim_config_t *c);
 void hstpf_sim_init(hstpf_sim_t *sim, const hstpf_sim_config_t *c);
 /* The sample at the current time, then advances one step. */
@@ -55,6 +98,9 @@ void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *out);
 /* Profile's commanded acceleration at time t and true speed v, m/s^2; *coast
  * set when traction is off (u = 0). */
 double hstpf_sim_accel_cmd(hstpf_profile_t p, double t, double v, int *coast);
+/* 1 when the rule above holds the train at rest over a step with traction u
+ * at speed v and track resistance g. */
+int hstpf_sim_held(const hstpf_theta_t *truth, double v, double u, double g);
 /* i + 600/R at position s. */
 double hstpf_sim_track(const hstpf_sim_config_t *c, double s);
 /* Exact samplers, exposed for tests. */

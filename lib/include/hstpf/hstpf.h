@@ -135,6 +135,24 @@ typedef enum {
     HSTPF_ENGINE_AUTO = 2
 } hstpf_engine_t;
 
+/** Whether the data fit a row of the table (docs/model.md, "Trains that are
+ *  not on Table 1"). */
+typedef enum {
+    HSTPF_FIT_UNKNOWN = 0, /**< not decided (or the hypothesis is off) */
+    HSTPF_FIT_TABLE = 1,   /**< a table type is declared: the train is that row */
+    /** No table type fits: the continuous hypothesis held above
+     *  declare_threshold for declare_hold_s (or the innovations fit no
+     *  hypothesis); theta is the refined estimate and off_what says what is
+     *  off. */
+    HSTPF_FIT_NONE = 2
+} hstpf_fit_t;
+
+/** Bits of hstpf_estimate_t.off_what. */
+#define HSTPF_OFF_COEF 1u  /**< the Davis coefficients are off every row */
+#define HSTPF_OFF_C0 2u    /**< mostly c0: a constant resistance offset (gradient-like) */
+#define HSTPF_OFF_GAIN 4u  /**< the reported traction's gain is not 1 */
+#define HSTPF_OFF_INNOV 8u /**< the innovations are inconsistent with every hypothesis */
+
 /** Configuration; fill with hstpf_config_default() then change fields. */
 typedef struct {
     const hstpf_theta_t *models; /**< n_models rows, read during init only */
@@ -154,8 +172,12 @@ typedef struct {
     /** Noise samples are scaled by sqrt(T / dt_nominal_s): exact for a
      *  Gaussian random walk, a first-order approximation otherwise (1 s). */
     double dt_nominal_s;
-    double init_speed_mps;       /**< prior speed mean at the first fix (0) */
-    double init_speed_sd;        /**< prior speed sd, >= 0 (1 m/s) */
+    double init_speed_mps;       /**< prior speed mean, m/s, used when init_speed_sd > 0 (0) */
+    /** Speed prior at acquisition, m/s. 0 (the default): unknown; the
+     *  filter acquires position and speed from its first two fixes (at any
+     *  speed, with no other configuration). > 0: the first fix alone
+     *  starts the filter with the speed N(init_speed_mps, init_speed_sd). */
+    double init_speed_sd;
     hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
     double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
     /** Roughening after resampling: jitter sd = k * spread * M^(-1/2) per
@@ -185,7 +207,7 @@ typedef struct {
      *  (0, HSTPF_DT_MAX_S] (30). */
     double max_gap_s;
     /** Measurements farther than this from the predicted position are
-     *  rejected with HSTPF_E_OUTLIER, m; 0 = no gate (1000). */
+     *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000). */
     double gate_m;
     /** After this many consecutive gated measurements the next one is
      *  taken as a new first fix (particles redrawn there, model weights
@@ -213,6 +235,23 @@ typedef struct {
      *  Kalman engine ignores it. Init cost with a Gamma e: a few 10^5
      *  exp/pow calls (docs/footprint.md). 0 = none (0). */
     double e_blur_sd;
+    /** 1: besides the rows, the bank weighs one continuous hypothesis, a
+     *  train near the table but on no row: an augmented EKF on (s, v, c0,
+     *  c1, c2, k) with Table 1 as prior (docs/model.md). Used with the
+     *  Kalman engine only (ignored otherwise). 0: rows only (0: it slows
+     *  the identification of on-table trains, docs/results.md). */
+    uint8_t refine;
+    /** Prior weight of the continuous hypothesis, [0, 0.5] (0.01). */
+    double refine_prior_q;
+    /** Relative sd of each coefficient around its row for load and wear,
+     *  in the continuous hypothesis' prior, [0, 1] (0.2). */
+    double refine_spread;
+    /** Prior sd of the traction gain k around 1, [0, 0.5] (0: k fixed at 1.
+     *  At constant speed k u - W(v) = 0 leaves k and theta on a ridge the
+     *  data do not resolve, and the EKF drifted along it: k 1 -> 0.84 in
+     *  20 min of cruise in a paper Case 1 run, pulling the hypothesis'
+     *  weight up with it). */
+    double refine_gain_sd;
 } hstpf_config_t;
 
 /** One step's inputs. */
@@ -269,14 +308,24 @@ typedef struct {
     double position_sd_m;
     hstpf_real_t speed_sd_mps;
     /** 1 when every published value is finite and within the ranges this
-     *  header documents and the filter has lock on the train (acquired from
-     *  fixes and not lost since); 0 otherwise: consumers must not use the
-     *  states, theta or resistance. */
+     *  header documents, the filter has lock on the train (acquired from
+     *  fixes and not lost since) and the latest fix was neither gated nor
+     *  beyond the likelihood floor of every weighted model; 0
+     *  otherwise: consumers must not use the states, theta or resistance. */
     uint8_t valid;
     /** 1 while the train is held at standstill (docs/model.md): the model
      *  weights are not updated. */
     uint8_t standstill;
-    hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)) */
+    hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
+    /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
+     *  of the rows (points) and the continuous hypothesis; 0 when declared.
+     *  hstpf_resistance_band() turns it into a band on W(v). */
+    hstpf_real_t theta_cov[6];
+    hstpf_real_t q_offtable; /**< weight of the continuous hypothesis (0 when off) */
+    hstpf_real_t gain;       /**< its traction-gain estimate k (1 when off) */
+    hstpf_real_t gain_sd;    /**< and its sd */
+    hstpf_fit_t fit;         /**< does a table row fit */
+    uint8_t off_what;        /**< HSTPF_OFF_* bits when fit is NONE */
     hstpf_real_t resistance; /**< W(speed) with theta, N/kN */
     int16_t best;           /**< index of the largest q_l */
     int16_t declared;       /**< declared model index, -1 if none */
@@ -299,12 +348,24 @@ typedef struct {
     hstpf_real_t k0, k1, k2;              /* xi c0, xi c1 3.6, xi c2 3.6^2 */
     double logq;
     hstpf_real_t s_mean, v_mean, ess, loglik;
+    hstpf_real_t s_var, v_var;            /* posterior variances */
+    uint8_t held;                         /* the whole posterior held at rest this step */
     uint32_t floor_hits, reacquired;
     uint16_t floor_run;                   /* consecutive all-floor steps */
     uint16_t track_hint;
     double kx[2];                         /* Kalman engine: mean (s rel., v) */
     double kp[3];                         /* and covariance (ss, sv, vv) */
 } hstpf_model_t;
+
+/* Private: the continuous-theta hypothesis. */
+#define HSTPF_REFINE_NZ 6
+typedef struct {
+    double kz[HSTPF_REFINE_NZ];                   /* s rel., v, c0, c1, c2, k */
+    double kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ]; /* covariance, row-major */
+    double logq, loglik, nis;                     /* nis: running mean of z^2 */
+    uint16_t track_hint;
+    uint8_t held, active, placed;
+} hstpf_refine_t;
 
 /**
  * The instance. Caller-owned; all members are private and may change
@@ -336,7 +397,17 @@ typedef struct {
     hstpf_status_t status;
     uint32_t outliers, reacquired;
     uint16_t outlier_run;            /* consecutive gated measurements */
-    uint8_t have_fix;
+    uint16_t lost_run;               /* consecutive fixes every weighted model put beyond its floor */
+    uint8_t have_fix;                /* locked: acquired and tracking */
+    uint8_t have_pend;               /* one fix waiting for a second to acquire */
+    uint8_t standstill;              /* this step's model weights were held */
+    uint8_t ever_locked;
+    double pend_y;                   /* that fix, absolute m */
+    double pend_age_s;               /* time since it */
+    uint32_t acquisitions, nonfinite_resets;
+    hstpf_refine_t rf;
+    double fit_held_s;               /* time the continuous hypothesis held q > thr */
+    uint8_t fit;
     uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
 } hstpf_t;
 
@@ -361,8 +432,9 @@ int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field);
 /**
  * @brief Initialises an instance: validates cfg, copies the models and the
  * track, builds the noise tables and seeds one RNG stream per model.
- * Particles are drawn at the first step that carries a position:
- * s = y - e_i (e_i from the measurement noise), v from the speed prior.
+ * The models are placed when the filter acquires lock from its first fixes
+ * (docs/model.md, "Acquisition and lock"): from two fixes with the default
+ * diffuse speed prior, from the first with a configured one.
  * @param f       caller-owned instance.
  * @param f_size  sizeof(hstpf_t) as the caller sees it (HSTPF_E_ABI if it
  *                differs from the library's: mismatched capacity macros).
@@ -387,14 +459,28 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
 int32_t hstpf_reset(hstpf_t *f);
 
 /**
+ * @brief Drops the lock: the filter re-acquires position and speed from the
+ * next fixes (as at the start), keeping the model weights and the
+ * declaration. For a caller that knows the time base broke (a receive-clock
+ * step). The estimate reads valid = 0 until re-acquired.
+ * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(1).
+ */
+int32_t hstpf_reacquire(hstpf_t *f);
+
+/**
  * @brief Advances every model by one step and, with a position, updates
  * particle weights, model weights and the declaration.
- * Before the first fix, steps without a position only advance time.
+ * Without lock (before the first fixes, after a step longer than
+ * max_gap_s, after hstpf_reacquire() or a non-finite state) a step only
+ * advances time and its fix serves the acquisition. While every weighted
+ * model is held at rest the model weights are not updated (standstill).
  * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_INIT; HSTPF_E_NONFINITE (dt,
  *   traction or position NaN/Inf); HSTPF_E_DT; HSTPF_E_RANGE (|traction| >
- *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M); HSTPF_E_OUTLIER (position
- *   farther than gate_m from the blended prediction). On error *f is
- *   unchanged and the next valid step proceeds normally.
+ *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M): on these *f is unchanged.
+ *   HSTPF_E_OUTLIER (position farther than gate_m from the blended
+ *   prediction): the step WAS taken, as a prediction without the fix; the
+ *   outlier counters advance and the fix is kept as a possible first fix
+ *   of a re-acquisition (after reacquire_after in a row).
  * Cost: O(n_models x n_particles): per particle two RNG draws and table
  * samples, the model update, one log-density and one exp look-up; per model
  * one log(); bounded. The Kalman engine: O(n_models), about 60 flops and
@@ -404,11 +490,20 @@ int32_t hstpf_reset(hstpf_t *f);
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
 
 /**
- * @brief Writes the current estimate. Before the first fix the states are
- * zero and the weights uniform.
+ * @brief Writes the current estimate. Before the first acquisition the states
+ * are zero (the position is the pending fix, if any) and the weights
+ * uniform; out->valid says whether the estimate may be used.
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(n_models).
  */
 int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
+
+/**
+ * @brief Running resistance W(v) of an estimate's theta and its standard
+ * deviation from theta_cov: W = h'theta, sd^2 = h' Cov h, h = (1, V, V^2),
+ * V = 3.6 v km/h. A 95 % band is W +- 1.96 sd.
+ * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_NONFINITE (v). Cost O(1).
+ */
+int32_t hstpf_resistance_band(const hstpf_estimate_t *e, double v_mps, double *w, double *sd);
 
 /**
  * @brief Copies the particles of model `model` (absolute positions) into

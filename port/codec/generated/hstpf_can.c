@@ -171,13 +171,16 @@ int hstpf_can_position_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->pos_valid, 4u, 0x10u);
-    dst_p[1] |= pack_left_shift_u8(src_p->pos_quality, 5u, 0xe0u);
+    dst_p[1] |= pack_left_shift_u8(src_p->pos_quality, 5u, 0x60u);
+    dst_p[1] |= pack_left_shift_u8(src_p->fix_time_valid, 7u, 0x80u);
     position = (uint64_t)src_p->position;
     dst_p[2] |= pack_left_shift_u64(position, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u64(position, 8u, 0xffu);
     dst_p[4] |= pack_right_shift_u64(position, 16u, 0xffu);
     dst_p[5] |= pack_right_shift_u64(position, 24u, 0xffu);
-    dst_p[6] |= pack_right_shift_u64(position, 32u, 0xffu);
+    dst_p[6] |= pack_right_shift_u64(position, 32u, 0x07u);
+    dst_p[6] |= pack_left_shift_u16(src_p->fix_time, 3u, 0xf8u);
+    dst_p[7] |= pack_right_shift_u16(src_p->fix_time, 5u, 0xffu);
 
     return (8);
 }
@@ -196,18 +199,21 @@ int hstpf_can_position_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->pos_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
-    dst_p->pos_quality = unpack_right_shift_u8(src_p[1], 5u, 0xe0u);
+    dst_p->pos_quality = unpack_right_shift_u8(src_p[1], 5u, 0x60u);
+    dst_p->fix_time_valid = unpack_right_shift_u8(src_p[1], 7u, 0x80u);
     position = unpack_right_shift_u64(src_p[2], 0u, 0xffu);
     position |= unpack_left_shift_u64(src_p[3], 8u, 0xffu);
     position |= unpack_left_shift_u64(src_p[4], 16u, 0xffu);
     position |= unpack_left_shift_u64(src_p[5], 24u, 0xffu);
-    position |= unpack_left_shift_u64(src_p[6], 32u, 0xffu);
+    position |= unpack_left_shift_u64(src_p[6], 32u, 0x07u);
 
-    if ((position & (1ull << 39)) != 0ull) {
-        position |= 0xffffff0000000000ull;
+    if ((position & (1ull << 34)) != 0ull) {
+        position |= 0xfffffff800000000ull;
     }
 
     dst_p->position = (int64_t)position;
+    dst_p->fix_time = unpack_right_shift_u16(src_p[6], 3u, 0xf8u);
+    dst_p->fix_time |= unpack_left_shift_u16(src_p[7], 5u, 0xffu);
 
     return (0);
 }
@@ -295,32 +301,72 @@ double hstpf_can_position_pos_quality_decode(uint8_t value)
 
 bool hstpf_can_position_pos_quality_is_in_range(uint8_t value)
 {
-    return (value <= 7u);
+    return (value <= 3u);
 }
 
 bool hstpf_can_position_pos_quality_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 7.0));
+    return ((value >= 0.0) && (value <= 3.0));
+}
+
+uint8_t hstpf_can_position_fix_time_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_position_fix_time_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_position_fix_time_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_position_fix_time_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
 }
 
 int64_t hstpf_can_position_position_encode(double value)
 {
-    return (int64_t)(round(value / 0.001));
+    return (int64_t)(round(value / 0.01));
 }
 
 double hstpf_can_position_position_decode(int64_t value)
 {
-    return ((double)value * 0.001);
+    return ((double)value * 0.01);
 }
 
 bool hstpf_can_position_position_is_in_range(int64_t value)
 {
-    return ((value >= -100000000000ll) && (value <= 100000000000ll));
+    return ((value >= -10000000000ll) && (value <= 10000000000ll));
 }
 
 bool hstpf_can_position_position_is_in_phys_range(double value)
 {
     return ((value >= -100000000.0) && (value <= 100000000.0));
+}
+
+uint16_t hstpf_can_position_fix_time_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_position_fix_time_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_position_fix_time_is_in_range(uint16_t value)
+{
+    return (value <= 8191u);
+}
+
+bool hstpf_can_position_fix_time_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 8191.0));
 }
 
 int hstpf_can_traction_pack(
@@ -482,6 +528,7 @@ int hstpf_can_est_state_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->est_valid, 4u, 0x10u);
+    dst_p[1] |= pack_left_shift_u8(src_p->est_fault, 5u, 0x20u);
     est_position = (uint32_t)src_p->est_position;
     dst_p[2] |= pack_left_shift_u32(est_position, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u32(est_position, 8u, 0xffu);
@@ -509,6 +556,7 @@ int hstpf_can_est_state_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->est_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->est_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
     est_position = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
     est_position |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
     est_position |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
@@ -592,6 +640,26 @@ bool hstpf_can_est_state_est_valid_is_in_phys_range(double value)
     return ((value >= 0.0) && (value <= 1.0));
 }
 
+uint8_t hstpf_can_est_state_est_fault_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_state_est_fault_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_state_est_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_state_est_fault_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
 int32_t hstpf_can_est_state_est_position_encode(double value)
 {
     return (int32_t)(round(value / 0.01));
@@ -634,6 +702,251 @@ bool hstpf_can_est_state_est_speed_is_in_range(int16_t value)
 bool hstpf_can_est_state_est_speed_is_in_phys_range(double value)
 {
     return ((value >= -327.68) && (value <= 327.67));
+}
+
+int hstpf_can_est_quality_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_est_quality_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[1] |= pack_left_shift_u8(src_p->qual_valid, 4u, 0x10u);
+    dst_p[1] |= pack_left_shift_u8(src_p->qual_fault, 5u, 0x20u);
+    dst_p[1] |= pack_left_shift_u8(src_p->standstill, 6u, 0x40u);
+    dst_p[1] |= pack_left_shift_u8(src_p->est_time_valid, 7u, 0x80u);
+    dst_p[2] |= pack_left_shift_u32(src_p->position_sd, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->position_sd, 8u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(src_p->position_sd, 16u, 0x0fu);
+    dst_p[4] |= pack_left_shift_u16(src_p->speed_sd, 4u, 0xf0u);
+    dst_p[5] |= pack_right_shift_u16(src_p->speed_sd, 4u, 0xffu);
+    dst_p[6] |= pack_left_shift_u16(src_p->est_time, 0u, 0xffu);
+    dst_p[7] |= pack_right_shift_u16(src_p->est_time, 8u, 0x1fu);
+
+    return (8);
+}
+
+int hstpf_can_est_quality_unpack(
+    struct hstpf_can_est_quality_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->qual_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->qual_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
+    dst_p->standstill = unpack_right_shift_u8(src_p[1], 6u, 0x40u);
+    dst_p->est_time_valid = unpack_right_shift_u8(src_p[1], 7u, 0x80u);
+    dst_p->position_sd = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
+    dst_p->position_sd |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
+    dst_p->position_sd |= unpack_left_shift_u32(src_p[4], 16u, 0x0fu);
+    dst_p->speed_sd = unpack_right_shift_u16(src_p[4], 4u, 0xf0u);
+    dst_p->speed_sd |= unpack_left_shift_u16(src_p[5], 4u, 0xffu);
+    dst_p->est_time = unpack_right_shift_u16(src_p[6], 0u, 0xffu);
+    dst_p->est_time |= unpack_left_shift_u16(src_p[7], 8u, 0x1fu);
+
+    return (0);
+}
+
+int hstpf_can_est_quality_init(struct hstpf_can_est_quality_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_est_quality_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_est_quality_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_est_quality_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_est_quality_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_est_quality_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint8_t hstpf_can_est_quality_qual_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_qual_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_qual_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_qual_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_quality_qual_fault_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_qual_fault_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_qual_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_qual_fault_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_quality_standstill_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_standstill_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_standstill_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_standstill_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_quality_est_time_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_est_time_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_est_time_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_quality_est_time_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint32_t hstpf_can_est_quality_position_sd_encode(double value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(round(value / 0.01)));
+}
+
+double hstpf_can_est_quality_position_sd_decode(uint32_t value)
+{
+    return ((double)value * 0.01);
+}
+
+bool hstpf_can_est_quality_position_sd_is_in_range(uint32_t value)
+{
+    return (value <= 1048575u);
+}
+
+bool hstpf_can_est_quality_position_sd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 10485.75));
+}
+
+uint16_t hstpf_can_est_quality_speed_sd_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.01)));
+}
+
+double hstpf_can_est_quality_speed_sd_decode(uint16_t value)
+{
+    return ((double)value * 0.01);
+}
+
+bool hstpf_can_est_quality_speed_sd_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_est_quality_speed_sd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 40.95));
+}
+
+uint16_t hstpf_can_est_quality_est_time_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_quality_est_time_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_quality_est_time_is_in_range(uint16_t value)
+{
+    return (value <= 8191u);
+}
+
+bool hstpf_can_est_quality_est_time_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 8191.0));
 }
 
 int hstpf_can_est_type_pack(
@@ -745,12 +1058,12 @@ double hstpf_can_est_type_type_status_decode(uint8_t value)
 
 bool hstpf_can_est_type_type_status_is_in_range(uint8_t value)
 {
-    return (value <= 2u);
+    return (value <= 3u);
 }
 
 bool hstpf_can_est_type_type_status_is_in_phys_range(double value)
 {
-    return ((value >= 0.0) && (value <= 2.0));
+    return ((value >= 0.0) && (value <= 3.0));
 }
 
 uint8_t hstpf_can_est_type_declared_type_encode(double value)
@@ -1442,4 +1755,207 @@ bool hstpf_can_health_sys_degeneracy_is_in_range(uint16_t value)
 bool hstpf_can_health_sys_degeneracy_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 4095.0));
+}
+
+int hstpf_can_health_time_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_health_time_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[2] |= pack_left_shift_u8(src_p->clock_steps_fwd, 0u, 0xffu);
+    dst_p[3] |= pack_left_shift_u8(src_p->clock_steps_back, 0u, 0xffu);
+    dst_p[4] |= pack_left_shift_u16(src_p->late_positions, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(src_p->late_positions, 8u, 0x0fu);
+    dst_p[5] |= pack_left_shift_u16(src_p->reacquisitions, 4u, 0xf0u);
+    dst_p[6] |= pack_right_shift_u16(src_p->reacquisitions, 4u, 0x3fu);
+    dst_p[6] |= pack_left_shift_u16(src_p->acquisitions, 6u, 0xc0u);
+    dst_p[7] |= pack_right_shift_u16(src_p->acquisitions, 2u, 0xffu);
+
+    return (8);
+}
+
+int hstpf_can_health_time_unpack(
+    struct hstpf_can_health_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->clock_steps_fwd = unpack_right_shift_u8(src_p[2], 0u, 0xffu);
+    dst_p->clock_steps_back = unpack_right_shift_u8(src_p[3], 0u, 0xffu);
+    dst_p->late_positions = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    dst_p->late_positions |= unpack_left_shift_u16(src_p[5], 8u, 0x0fu);
+    dst_p->reacquisitions = unpack_right_shift_u16(src_p[5], 4u, 0xf0u);
+    dst_p->reacquisitions |= unpack_left_shift_u16(src_p[6], 4u, 0x3fu);
+    dst_p->acquisitions = unpack_right_shift_u16(src_p[6], 6u, 0xc0u);
+    dst_p->acquisitions |= unpack_left_shift_u16(src_p[7], 2u, 0xffu);
+
+    return (0);
+}
+
+int hstpf_can_health_time_init(struct hstpf_can_health_time_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_health_time_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_health_time_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_health_time_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_health_time_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint8_t hstpf_can_health_time_clock_steps_fwd_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_clock_steps_fwd_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_health_time_clock_steps_back_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_clock_steps_back_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_health_time_clock_steps_back_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint16_t hstpf_can_health_time_late_positions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_late_positions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_late_positions_is_in_range(uint16_t value)
+{
+    return (value <= 4095u);
+}
+
+bool hstpf_can_health_time_late_positions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4095.0));
+}
+
+uint16_t hstpf_can_health_time_reacquisitions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_reacquisitions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value)
+{
+    return (value <= 1023u);
+}
+
+bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1023.0));
+}
+
+uint16_t hstpf_can_health_time_acquisitions_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_time_acquisitions_decode(uint16_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_time_acquisitions_is_in_range(uint16_t value)
+{
+    return (value <= 1023u);
+}
+
+bool hstpf_can_health_time_acquisitions_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1023.0));
 }

@@ -48,37 +48,45 @@ extern "C" {
 #define HSTPF_CAN_POSITION_FRAME_ID (0x100u)
 #define HSTPF_CAN_TRACTION_FRAME_ID (0x101u)
 #define HSTPF_CAN_EST_STATE_FRAME_ID (0x200u)
+#define HSTPF_CAN_EST_QUALITY_FRAME_ID (0x201u)
 #define HSTPF_CAN_EST_TYPE_FRAME_ID (0x210u)
 #define HSTPF_CAN_EST_THETA_FRAME_ID (0x211u)
 #define HSTPF_CAN_HEALTH_RX_FRAME_ID (0x220u)
 #define HSTPF_CAN_HEALTH_SYS_FRAME_ID (0x221u)
+#define HSTPF_CAN_HEALTH_TIME_FRAME_ID (0x222u)
 
 /* Frame lengths in bytes. */
 #define HSTPF_CAN_POSITION_LENGTH (8u)
 #define HSTPF_CAN_TRACTION_LENGTH (8u)
 #define HSTPF_CAN_EST_STATE_LENGTH (8u)
+#define HSTPF_CAN_EST_QUALITY_LENGTH (8u)
 #define HSTPF_CAN_EST_TYPE_LENGTH (8u)
 #define HSTPF_CAN_EST_THETA_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_RX_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_SYS_LENGTH (8u)
+#define HSTPF_CAN_HEALTH_TIME_LENGTH (8u)
 
 /* Extended or standard frame types. */
 #define HSTPF_CAN_POSITION_IS_EXTENDED (0)
 #define HSTPF_CAN_TRACTION_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_STATE_IS_EXTENDED (0)
+#define HSTPF_CAN_EST_QUALITY_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_TYPE_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_THETA_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_RX_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_SYS_IS_EXTENDED (0)
+#define HSTPF_CAN_HEALTH_TIME_IS_EXTENDED (0)
 
 /* Frame cycle times in milliseconds. */
 #define HSTPF_CAN_POSITION_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_TRACTION_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_EST_STATE_CYCLE_TIME_MS (100u)
+#define HSTPF_CAN_EST_QUALITY_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_EST_TYPE_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_EST_THETA_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_RX_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_SYS_CYCLE_TIME_MS (1000u)
+#define HSTPF_CAN_HEALTH_TIME_CYCLE_TIME_MS (1000u)
 
 /* Signal choices. */
 #define HSTPF_CAN_POSITION_POS_VALID_INVALID_CHOICE (0u)
@@ -89,15 +97,34 @@ extern "C" {
 #define HSTPF_CAN_POSITION_POS_QUALITY_GNSS_CHOICE (2u)
 #define HSTPF_CAN_POSITION_POS_QUALITY_BALISE_CHOICE (3u)
 
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_ABSENT_CHOICE (0u)
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_PRESENT_CHOICE (1u)
+
 #define HSTPF_CAN_TRACTION_TRACT_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_TRACTION_TRACT_VALID_VALID_CHOICE (1u)
 
 #define HSTPF_CAN_EST_STATE_EST_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_EST_STATE_EST_VALID_VALID_CHOICE (1u)
 
+#define HSTPF_CAN_EST_STATE_EST_FAULT_NONE_CHOICE (0u)
+#define HSTPF_CAN_EST_STATE_EST_FAULT_CLAMPED_CHOICE (1u)
+
+#define HSTPF_CAN_EST_QUALITY_QUAL_VALID_INVALID_CHOICE (0u)
+#define HSTPF_CAN_EST_QUALITY_QUAL_VALID_VALID_CHOICE (1u)
+
+#define HSTPF_CAN_EST_QUALITY_QUAL_FAULT_NONE_CHOICE (0u)
+#define HSTPF_CAN_EST_QUALITY_QUAL_FAULT_CLAMPED_CHOICE (1u)
+
+#define HSTPF_CAN_EST_QUALITY_STANDSTILL_MOVING_CHOICE (0u)
+#define HSTPF_CAN_EST_QUALITY_STANDSTILL_STANDSTILL_CHOICE (1u)
+
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_ABSENT_CHOICE (0u)
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_PRESENT_CHOICE (1u)
+
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_UNDECIDED_CHOICE (0u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_DECLARED_CHOICE (1u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_CHANGED_CHOICE (2u)
+#define HSTPF_CAN_EST_TYPE_TYPE_STATUS_WITHDRAWN_CHOICE (3u)
 
 #define HSTPF_CAN_EST_TYPE_DECLARED_TYPE_CRH1_CHOICE (0u)
 #define HSTPF_CAN_EST_TYPE_DECLARED_TYPE_CRH2_CHOICE (1u)
@@ -146,17 +173,21 @@ extern "C" {
 #define HSTPF_CAN_POSITION_NAME "Position"
 #define HSTPF_CAN_TRACTION_NAME "Traction"
 #define HSTPF_CAN_EST_STATE_NAME "EstState"
+#define HSTPF_CAN_EST_QUALITY_NAME "EstQuality"
 #define HSTPF_CAN_EST_TYPE_NAME "EstType"
 #define HSTPF_CAN_EST_THETA_NAME "EstTheta"
 #define HSTPF_CAN_HEALTH_RX_NAME "HealthRx"
 #define HSTPF_CAN_HEALTH_SYS_NAME "HealthSys"
+#define HSTPF_CAN_HEALTH_TIME_NAME "HealthTime"
 
 /* Signal Names. */
 #define HSTPF_CAN_POSITION_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_POSITION_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_POSITION_POS_VALID_NAME "PosValid"
 #define HSTPF_CAN_POSITION_POS_QUALITY_NAME "PosQuality"
+#define HSTPF_CAN_POSITION_FIX_TIME_VALID_NAME "FixTimeValid"
 #define HSTPF_CAN_POSITION_POSITION_NAME "Position"
+#define HSTPF_CAN_POSITION_FIX_TIME_NAME "FixTime"
 #define HSTPF_CAN_TRACTION_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_TRACTION_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_TRACTION_TRACT_VALID_NAME "TractValid"
@@ -164,8 +195,18 @@ extern "C" {
 #define HSTPF_CAN_EST_STATE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_STATE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_STATE_EST_VALID_NAME "EstValid"
+#define HSTPF_CAN_EST_STATE_EST_FAULT_NAME "EstFault"
 #define HSTPF_CAN_EST_STATE_EST_POSITION_NAME "EstPosition"
 #define HSTPF_CAN_EST_STATE_EST_SPEED_NAME "EstSpeed"
+#define HSTPF_CAN_EST_QUALITY_E2E_CRC_NAME "E2eCrc"
+#define HSTPF_CAN_EST_QUALITY_E2E_COUNTER_NAME "E2eCounter"
+#define HSTPF_CAN_EST_QUALITY_QUAL_VALID_NAME "QualValid"
+#define HSTPF_CAN_EST_QUALITY_QUAL_FAULT_NAME "QualFault"
+#define HSTPF_CAN_EST_QUALITY_STANDSTILL_NAME "Standstill"
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_VALID_NAME "EstTimeValid"
+#define HSTPF_CAN_EST_QUALITY_POSITION_SD_NAME "PositionSd"
+#define HSTPF_CAN_EST_QUALITY_SPEED_SD_NAME "SpeedSd"
+#define HSTPF_CAN_EST_QUALITY_EST_TIME_NAME "EstTime"
 #define HSTPF_CAN_EST_TYPE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_TYPE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_NAME "TypeStatus"
@@ -194,6 +235,13 @@ extern "C" {
 #define HSTPF_CAN_HEALTH_SYS_UNKNOWN_ID_NAME "UnknownId"
 #define HSTPF_CAN_HEALTH_SYS_ERROR_FRAMES_NAME "ErrorFrames"
 #define HSTPF_CAN_HEALTH_SYS_DEGENERACY_NAME "Degeneracy"
+#define HSTPF_CAN_HEALTH_TIME_E2E_CRC_NAME "E2eCrc"
+#define HSTPF_CAN_HEALTH_TIME_E2E_COUNTER_NAME "E2eCounter"
+#define HSTPF_CAN_HEALTH_TIME_CLOCK_STEPS_FWD_NAME "ClockStepsFwd"
+#define HSTPF_CAN_HEALTH_TIME_CLOCK_STEPS_BACK_NAME "ClockStepsBack"
+#define HSTPF_CAN_HEALTH_TIME_LATE_POSITIONS_NAME "LatePositions"
+#define HSTPF_CAN_HEALTH_TIME_REACQUISITIONS_NAME "Reacquisitions"
+#define HSTPF_CAN_HEALTH_TIME_ACQUISITIONS_NAME "Acquisitions"
 
 /**
  * Signals in message Position.
@@ -233,20 +281,38 @@ struct hstpf_can_position_t {
     /**
      * Source of the fix; informative only.
      *
-     * Range: 0..7 (0..7 -)
+     * Range: 0..3 (0..3 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t pos_quality;
 
     /**
-     * Distance along the run from its origin, signed (a noisy fix near the origin can be negative), 1 mm; range as the library accepts (1e8 m).
+     * 1: FixTime holds the time of this fix; 0: the sender has no fix clock (the receiver dates the fix by its receive time).
      *
-     * Range: -100000000000..100000000000 (-100000000..100000000 m)
-     * Scale: 0.001
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fix_time_valid;
+
+    /**
+     * Distance along the run from its origin, signed (a noisy fix near the origin can be negative), 1 cm; range as the library accepts (+-1e8 m; the 35-bit field holds +-1.7e8 m).
+     *
+     * Range: -10000000000..10000000000 (-100000000..100000000 m)
+     * Scale: 0.01
      * Offset: 0
      */
     int64_t position;
+
+    /**
+     * Time the position was measured, on the sender's own millisecond clock, modulo 8192 (1 ms resolution, wraps every 8.192 s). Only differences are used, taken modulo 8192: consecutive fixes fewer than 4.096 s apart are dated exactly; across a longer gap the receiver resolves the wraps with its receive times.
+     *
+     * Range: 0..8191 (0..8191 ms)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t fix_time;
 };
 
 /**
@@ -313,13 +379,22 @@ struct hstpf_can_est_state_t {
     uint8_t e2e_counter;
 
     /**
-     * 1: the estimator has had its first fix.
+     * 1: the estimate is valid (the estimator has lock: finite, within its documented ranges) and both values of this frame are finite and within their signal ranges. 0: do not use EstPosition or EstSpeed.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
      * Offset: 0
      */
     uint8_t est_valid;
+
+    /**
+     * 1: a value of this frame could not be published as it is: non-finite (sent as 0) or beyond its signal's range (clamped); EstValid is then 0.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t est_fault;
 
     /**
      * Estimated position, same origin as Position, 1 cm (+-21474 km).
@@ -338,6 +413,92 @@ struct hstpf_can_est_state_t {
      * Offset: 0
      */
     int16_t est_speed;
+};
+
+/**
+ * Signals in message EstQuality.
+ *
+ * Uncertainty and time of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, and the time the estimate refers to. Sent right after EstState, for the same estimator step, at most every 100 ms.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct hstpf_can_est_quality_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_crc;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_counter;
+
+    /**
+     * 1: the estimate is valid and both standard deviations are finite and within their signal ranges. 0: do not use PositionSd or SpeedSd.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t qual_valid;
+
+    /**
+     * 1: a standard deviation was non-finite (sent as 0) or clamped to its range; QualValid is then 0.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t qual_fault;
+
+    /**
+     * 1: the train is held at standstill (the model weights are not updated).
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t standstill;
+
+    /**
+     * 1: EstTime holds the time of the estimate (the receiver has a fix clock: the position frames carry FixTime).
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t est_time_valid;
+
+    /**
+     * Standard deviation of the estimated position (EstPosition); about 95 % of the truth lies within +-1.96 sd.
+     *
+     * Range: 0..1048575 (0..10485.75 m)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint32_t position_sd;
+
+    /**
+     * Standard deviation of the estimated speed (EstSpeed).
+     *
+     * Range: 0..4095 (0..40.95 m/s)
+     * Scale: 0.01
+     * Offset: 0
+     */
+    uint16_t speed_sd;
+
+    /**
+     * Time the estimate of this step (and of the EstState frame just before) refers to, on the position sender's fix clock (Position.FixTime): ms modulo 8192. An estimate is then dated whatever the bus, gateway or estimator latency.
+     *
+     * Range: 0..8191 (0..8191 ms)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t est_time;
 };
 
 /**
@@ -363,9 +524,9 @@ struct hstpf_can_est_type_t {
     uint8_t e2e_counter;
 
     /**
-     * Declaration status (Table 2 rule).
+     * Declaration status (Table 2 rule; hstpf_status_t): 0 undecided, 1 declared, 2 changed (another type replaced the declared one), 3 withdrawn (the declared type's weight fell below withdraw_threshold; none declared).
      *
-     * Range: 0..2 (0..2 -)
+     * Range: 0..3 (0..3 -)
      * Scale: 1
      * Offset: 0
      */
@@ -431,7 +592,7 @@ struct hstpf_can_est_theta_t {
     uint8_t e2e_counter;
 
     /**
-     * 1: C0..C2 hold an estimate.
+     * 1: C0..C2 hold a valid estimate, each finite and within its signal range.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
@@ -440,7 +601,7 @@ struct hstpf_can_est_theta_t {
     uint8_t theta_valid;
 
     /**
-     * 1: at least one coefficient was clipped to its signal range.
+     * 1: at least one coefficient was non-finite (sent as 0) or clipped to its signal range; ThetaValid is then 0.
      *
      * Range: 0..1 (0..1 -)
      * Scale: 1
@@ -610,6 +771,74 @@ struct hstpf_can_health_sys_t {
      * Offset: 0
      */
     uint16_t degeneracy;
+};
+
+/**
+ * Signals in message HealthTime.
+ *
+ * Receive-clock faults and (re)acquisitions since start; each count saturates. Cycle 1000 ms.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct hstpf_can_health_time_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_crc;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_counter;
+
+    /**
+     * Forward steps of the receive clock: a stamp more than max_gap_s after the latest; saturates at 255.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t clock_steps_fwd;
+
+    /**
+     * Backward steps of the receive clock: a stamp more than 1 s before the latest; saturates at 255.
+     *
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t clock_steps_back;
+
+    /**
+     * Valid positions dropped because they were not newer than the last estimator step.
+     *
+     * Range: 0..4095 (0..4095 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t late_positions;
+
+    /**
+     * Times the daemon made the estimator re-acquire from the next fix (a gap beyond max_gap_s or a clock step); saturates at 1023.
+     *
+     * Range: 0..1023 (0..1023 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t reacquisitions;
+
+    /**
+     * Times the estimator (re)acquired lock from fixes: start, outage, gated run, clock step (hstpf_estimate_t.acquisitions); saturates at 1023.
+     *
+     * Range: 0..1023 (0..1023 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint16_t acquisitions;
 };
 
 /**
@@ -816,6 +1045,46 @@ bool hstpf_can_position_pos_quality_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
+uint8_t hstpf_can_position_fix_time_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_position_fix_time_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 int64_t hstpf_can_position_position_encode(double value);
 
 /**
@@ -848,6 +1117,46 @@ bool hstpf_can_position_position_is_in_range(int64_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_position_position_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_position_fix_time_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_position_fix_time_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_position_fix_time_is_in_phys_range(double value);
 
 /**
  * Pack message Traction.
@@ -1210,6 +1519,46 @@ bool hstpf_can_est_state_est_valid_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
+uint8_t hstpf_can_est_state_est_fault_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_state_est_fault_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_state_est_fault_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_state_est_fault_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 int32_t hstpf_can_est_state_est_position_encode(double value);
 
 /**
@@ -1282,6 +1631,403 @@ bool hstpf_can_est_state_est_speed_is_in_range(int16_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_est_state_est_speed_is_in_phys_range(double value);
+
+/**
+ * Pack message EstQuality.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int hstpf_can_est_quality_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_est_quality_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message EstQuality.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int hstpf_can_est_quality_unpack(
+    struct hstpf_can_est_quality_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from EstQuality.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int hstpf_can_est_quality_init(struct hstpf_can_est_quality_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_e2e_crc_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_e2e_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_e2e_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_e2e_crc_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_e2e_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_e2e_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_e2e_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_e2e_counter_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_qual_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_qual_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_qual_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_qual_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_qual_fault_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_qual_fault_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_qual_fault_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_qual_fault_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_standstill_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_standstill_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_standstill_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_standstill_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_quality_est_time_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_est_time_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t hstpf_can_est_quality_position_sd_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_position_sd_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_position_sd_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_position_sd_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_quality_speed_sd_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_speed_sd_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_speed_sd_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_speed_sd_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_quality_est_time_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_quality_est_time_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_quality_est_time_is_in_phys_range(double value);
 
 /**
  * Pack message EstType.
@@ -2550,6 +3296,323 @@ bool hstpf_can_health_sys_degeneracy_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_health_sys_degeneracy_is_in_phys_range(double value);
+
+/**
+ * Pack message HealthTime.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int hstpf_can_health_time_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_health_time_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message HealthTime.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int hstpf_can_health_time_unpack(
+    struct hstpf_can_health_time_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from HealthTime.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int hstpf_can_health_time_init(struct hstpf_can_health_time_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_e2e_crc_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_e2e_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_crc_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_e2e_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_e2e_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_e2e_counter_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_clock_steps_fwd_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_clock_steps_fwd_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_fwd_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_fwd_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_time_clock_steps_back_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_clock_steps_back_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_back_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_clock_steps_back_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_late_positions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_late_positions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_late_positions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_late_positions_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_reacquisitions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_reacquisitions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_reacquisitions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_reacquisitions_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_health_time_acquisitions_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_time_acquisitions_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_acquisitions_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_time_acquisitions_is_in_phys_range(double value);
 
 
 #ifdef __cplusplus

@@ -4,13 +4,15 @@
 #include <stddef.h>
 
 const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
-    {0x100u, 0x1101u, 8u, 100u, "Position"},
-    {0x101u, 0x1102u, 8u, 100u, "Traction"},
-    {0x200u, 0x2101u, 8u, 100u, "EstState"},
-    {0x210u, 0x2102u, 8u, 1000u, "EstType"},
-    {0x211u, 0x2103u, 8u, 1000u, "EstTheta"},
-    {0x220u, 0x2104u, 8u, 1000u, "HealthRx"},
-    {0x221u, 0x2105u, 8u, 1000u, "HealthSys"},
+    {0x100u, 0x1101u, 8u, 100u, 3u, 500u, "Position"},
+    {0x101u, 0x1102u, 8u, 100u, 3u, 500u, "Traction"},
+    {0x200u, 0x2101u, 8u, 100u, 3u, 5000u, "EstState"},
+    {0x201u, 0x2107u, 8u, 100u, 3u, 5000u, "EstQuality"},
+    {0x210u, 0x2102u, 8u, 1000u, 3u, 5000u, "EstType"},
+    {0x211u, 0x2103u, 8u, 1000u, 3u, 5000u, "EstTheta"},
+    {0x220u, 0x2104u, 8u, 1000u, 3u, 5000u, "HealthRx"},
+    {0x221u, 0x2105u, 8u, 1000u, 3u, 5000u, "HealthSys"},
+    {0x222u, 0x2106u, 8u, 1000u, 3u, 5000u, "HealthTime"},
 };
 
 const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)
@@ -23,6 +25,23 @@ const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id)
         }
     }
     return NULL;
+}
+
+int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id)
+{
+    const hstpf_frame_info_t *f = hstpf_frame_find(can_id);
+
+    if (cfg == NULL) {
+        return HSTPF_E2E_E_NULL;
+    }
+    if (f == NULL) {
+        return HSTPF_E2E_E_ARG;
+    }
+    cfg->data_id = f->data_id;
+    cfg->length = f->length;
+    cfg->max_delta = f->e2e_max_delta;
+    cfg->timeout_ms = f->e2e_timeout_ms;
+    return 0;
 }
 
 /* Clamp in the raw domain first, so the integer conversion is defined. */
@@ -49,12 +68,22 @@ uint8_t hstpf_frames_position_pos_valid_raw(double phys)
 
 uint8_t hstpf_frames_position_pos_quality_raw(double phys)
 {
-    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 7.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
+}
+
+uint8_t hstpf_frames_position_fix_time_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
 int64_t hstpf_frames_position_position_raw(double phys)
 {
-    return (int64_t)raw_sat(phys, 0.001, 0.0, -100000000000.0, 100000000000.0);
+    return (int64_t)raw_sat(phys, 0.01, 0.0, -10000000000.0, 10000000000.0);
+}
+
+uint16_t hstpf_frames_position_fix_time_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 8191.0);
 }
 
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys)
@@ -72,6 +101,11 @@ uint8_t hstpf_frames_est_state_est_valid_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
+uint8_t hstpf_frames_est_state_est_fault_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
 int32_t hstpf_frames_est_state_est_position_raw(double phys)
 {
     return (int32_t)raw_sat(phys, 0.01, 0.0, -2147483648.0, 2147483647.0);
@@ -82,9 +116,44 @@ int16_t hstpf_frames_est_state_est_speed_raw(double phys)
     return (int16_t)raw_sat(phys, 0.01, 0.0, -32768.0, 32767.0);
 }
 
+uint8_t hstpf_frames_est_quality_qual_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_quality_qual_fault_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_quality_standstill_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_quality_est_time_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint32_t hstpf_frames_est_quality_position_sd_raw(double phys)
+{
+    return (uint32_t)raw_sat(phys, 0.01, 0.0, 0.0, 1048575.0);
+}
+
+uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.01, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_est_quality_est_time_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 8191.0);
+}
+
 uint8_t hstpf_frames_est_type_type_status_raw(double phys)
 {
-    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 2.0);
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
 }
 
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys)
@@ -180,4 +249,29 @@ uint16_t hstpf_frames_health_sys_error_frames_raw(double phys)
 uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys)
 {
     return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint8_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 255.0);
+}
+
+uint8_t hstpf_frames_health_time_clock_steps_back_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 255.0);
+}
+
+uint16_t hstpf_frames_health_time_late_positions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);
+}
+
+uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 1023.0);
+}
+
+uint16_t hstpf_frames_health_time_acquisitions_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 1023.0);
 }

@@ -4,54 +4,96 @@
 
 #include <stdint.h>
 
+#include "hstpf_e2e.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/* E2E parameters, from the DBC's attributes: the profile (HstpfE2EProfile)
+ * and the receiver defaults (BA_DEF_DEF_ of HstpfE2EMaxDeltaCounter and
+ * HstpfE2ETimeoutMs); each frame's own values are in hstpf_frames[]. */
+#define HSTPF_E2E_PROFILE "P01"
+#define HSTPF_E2E_DEFAULT_MAX_DELTA 3u
+#define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
+
 /** Number of frames in hstpf_frames[]. */
-#define HSTPF_FRAMES_COUNT 7u
+#define HSTPF_FRAMES_COUNT 9u
 
 /* Position: Measured train position along the run. */
 #define HSTPF_FRAME_POSITION_ID 0x100u
 #define HSTPF_FRAME_POSITION_DATA_ID 0x1101u
 #define HSTPF_FRAME_POSITION_LENGTH 8u
 #define HSTPF_FRAME_POSITION_CYCLE_MS 100u
+#define HSTPF_FRAME_POSITION_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_POSITION_E2E_TIMEOUT_MS 500u
 
 /* Traction: Traction/braking effort. */
 #define HSTPF_FRAME_TRACTION_ID 0x101u
 #define HSTPF_FRAME_TRACTION_DATA_ID 0x1102u
 #define HSTPF_FRAME_TRACTION_LENGTH 8u
 #define HSTPF_FRAME_TRACTION_CYCLE_MS 100u
+#define HSTPF_FRAME_TRACTION_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_TRACTION_E2E_TIMEOUT_MS 500u
 
 /* EstState: Estimated position and speed (blended over models). */
 #define HSTPF_FRAME_EST_STATE_ID 0x200u
 #define HSTPF_FRAME_EST_STATE_DATA_ID 0x2101u
 #define HSTPF_FRAME_EST_STATE_LENGTH 8u
 #define HSTPF_FRAME_EST_STATE_CYCLE_MS 100u
+#define HSTPF_FRAME_EST_STATE_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_STATE_E2E_TIMEOUT_MS 5000u
+
+/* EstQuality: Uncertainty and time of the estimate: standard deviations of the blended posterior (the mixture over the models, so the spread between models is included), standstill, and the time the estimate refers to. */
+#define HSTPF_FRAME_EST_QUALITY_ID 0x201u
+#define HSTPF_FRAME_EST_QUALITY_DATA_ID 0x2107u
+#define HSTPF_FRAME_EST_QUALITY_LENGTH 8u
+#define HSTPF_FRAME_EST_QUALITY_CYCLE_MS 100u
+#define HSTPF_FRAME_EST_QUALITY_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_QUALITY_E2E_TIMEOUT_MS 5000u
 
 /* EstType: Declared train type, its weight and status; current leader. */
 #define HSTPF_FRAME_EST_TYPE_ID 0x210u
 #define HSTPF_FRAME_EST_TYPE_DATA_ID 0x2102u
 #define HSTPF_FRAME_EST_TYPE_LENGTH 8u
 #define HSTPF_FRAME_EST_TYPE_CYCLE_MS 1000u
+#define HSTPF_FRAME_EST_TYPE_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_TYPE_E2E_TIMEOUT_MS 5000u
 
 /* EstTheta: Estimated Davis coefficients theta = sum q_l theta_l. */
 #define HSTPF_FRAME_EST_THETA_ID 0x211u
 #define HSTPF_FRAME_EST_THETA_DATA_ID 0x2103u
 #define HSTPF_FRAME_EST_THETA_LENGTH 8u
 #define HSTPF_FRAME_EST_THETA_CYCLE_MS 1000u
+#define HSTPF_FRAME_EST_THETA_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_THETA_E2E_TIMEOUT_MS 5000u
 
 /* HealthRx: Receiver fault counts since start, summed over both input streams; each saturates at 4095. */
 #define HSTPF_FRAME_HEALTH_RX_ID 0x220u
 #define HSTPF_FRAME_HEALTH_RX_DATA_ID 0x2104u
 #define HSTPF_FRAME_HEALTH_RX_LENGTH 8u
 #define HSTPF_FRAME_HEALTH_RX_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_RX_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_RX_E2E_TIMEOUT_MS 5000u
 
 /* HealthSys: Other fault counts since start; each saturates at 4095. */
 #define HSTPF_FRAME_HEALTH_SYS_ID 0x221u
 #define HSTPF_FRAME_HEALTH_SYS_DATA_ID 0x2105u
 #define HSTPF_FRAME_HEALTH_SYS_LENGTH 8u
 #define HSTPF_FRAME_HEALTH_SYS_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_SYS_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_SYS_E2E_TIMEOUT_MS 5000u
+
+/* HealthTime: Receive-clock faults and (re)acquisitions since start; each count saturates. */
+#define HSTPF_FRAME_HEALTH_TIME_ID 0x222u
+#define HSTPF_FRAME_HEALTH_TIME_DATA_ID 0x2106u
+#define HSTPF_FRAME_HEALTH_TIME_LENGTH 8u
+#define HSTPF_FRAME_HEALTH_TIME_CYCLE_MS 1000u
+#define HSTPF_FRAME_HEALTH_TIME_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_HEALTH_TIME_E2E_TIMEOUT_MS 5000u
+
+/** Position.FixTime wraps at this many ms: differences are taken modulo it. */
+#define HSTPF_FIX_TIME_WRAP_MS 8192u
 
 /** One frame of the DBC. */
 typedef struct {
@@ -59,6 +101,8 @@ typedef struct {
     uint16_t data_id;  /**< E2E data ID */
     uint8_t length;    /**< bytes (DLC) */
     uint16_t cycle_ms; /**< nominal cycle time */
+    uint8_t e2e_max_delta;   /**< receiver: largest accepted counter step */
+    uint16_t e2e_timeout_ms; /**< receiver: stale after this long */
     const char *name;  /**< DBC message name */
 } hstpf_frame_info_t;
 
@@ -68,6 +112,11 @@ extern const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT];
 /** @brief The frame with this ID, or NULL (an unknown ID). O(frames). */
 const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);
 
+/** @brief Fills an E2E receiver configuration for frame can_id with the
+ * DBC's data ID, length, max delta counter and timeout.
+ * @return 0, HSTPF_E2E_E_NULL, or HSTPF_E2E_E_ARG (an unknown ID). */
+int32_t hstpf_frames_e2e_rx_config(hstpf_e2e_rx_config_t *cfg, uint32_t can_id);
+
 /*
  * Physical value -> raw signal value for the hstpf_can_*_t structs:
  * clamped to the DBC's [min, max], rounded half away from zero, NaN -> the
@@ -76,21 +125,41 @@ const hstpf_frame_info_t *hstpf_frame_find(uint32_t can_id);
  */
 /** Position.PosValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_position_pos_valid_raw(double phys);
-/** Position.PosQuality: scale 1, [0, 7]. */
+/** Position.PosQuality: scale 1, [0, 3]. */
 uint8_t hstpf_frames_position_pos_quality_raw(double phys);
-/** Position.Position: scale 0.001, [-1e+08, 1e+08] m. */
+/** Position.FixTimeValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_position_fix_time_valid_raw(double phys);
+/** Position.Position: scale 0.01, [-1e+08, 1e+08] m. */
 int64_t hstpf_frames_position_position_raw(double phys);
+/** Position.FixTime: scale 1, [0, 8191] ms. */
+uint16_t hstpf_frames_position_fix_time_raw(double phys);
 /** Traction.TractValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys);
 /** Traction.TractForce: scale 0.01, [-83886.1, 83886.1] kN. */
 int32_t hstpf_frames_traction_tract_force_raw(double phys);
 /** EstState.EstValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_est_state_est_valid_raw(double phys);
+/** EstState.EstFault: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_state_est_fault_raw(double phys);
 /** EstState.EstPosition: scale 0.01, [-2.14748e+07, 2.14748e+07] m. */
 int32_t hstpf_frames_est_state_est_position_raw(double phys);
 /** EstState.EstSpeed: scale 0.01, [-327.68, 327.67] m/s. */
 int16_t hstpf_frames_est_state_est_speed_raw(double phys);
-/** EstType.TypeStatus: scale 1, [0, 2]. */
+/** EstQuality.QualValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_qual_valid_raw(double phys);
+/** EstQuality.QualFault: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_qual_fault_raw(double phys);
+/** EstQuality.Standstill: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_standstill_raw(double phys);
+/** EstQuality.EstTimeValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_quality_est_time_valid_raw(double phys);
+/** EstQuality.PositionSd: scale 0.01, [0, 10485.8] m. */
+uint32_t hstpf_frames_est_quality_position_sd_raw(double phys);
+/** EstQuality.SpeedSd: scale 0.01, [0, 40.95] m/s. */
+uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys);
+/** EstQuality.EstTime: scale 1, [0, 8191] ms. */
+uint16_t hstpf_frames_est_quality_est_time_raw(double phys);
+/** EstType.TypeStatus: scale 1, [0, 3]. */
 uint8_t hstpf_frames_est_type_type_status_raw(double phys);
 /** EstType.DeclaredType: scale 1, [0, 255]. */
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys);
@@ -130,6 +199,16 @@ uint16_t hstpf_frames_health_sys_unknown_id_raw(double phys);
 uint16_t hstpf_frames_health_sys_error_frames_raw(double phys);
 /** HealthSys.Degeneracy: scale 1, [0, 4095]. */
 uint16_t hstpf_frames_health_sys_degeneracy_raw(double phys);
+/** HealthTime.ClockStepsFwd: scale 1, [0, 255]. */
+uint8_t hstpf_frames_health_time_clock_steps_fwd_raw(double phys);
+/** HealthTime.ClockStepsBack: scale 1, [0, 255]. */
+uint8_t hstpf_frames_health_time_clock_steps_back_raw(double phys);
+/** HealthTime.LatePositions: scale 1, [0, 4095]. */
+uint16_t hstpf_frames_health_time_late_positions_raw(double phys);
+/** HealthTime.Reacquisitions: scale 1, [0, 1023]. */
+uint16_t hstpf_frames_health_time_reacquisitions_raw(double phys);
+/** HealthTime.Acquisitions: scale 1, [0, 1023]. */
+uint16_t hstpf_frames_health_time_acquisitions_raw(double phys);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,219 @@
+/* The continuous-theta hypothesis ("a train that is not on the table"): one
+ * extended Kalman filter on z = (s, v, c0, c1, c2, k), k the gain of the
+ * reported traction, with Table 1 as its prior. Given the speed the dynamics
+ * are linear in (c0, c1, c2, k) (Eq. 6), so the augmented EKF is close to
+ * the exact conjugate update; its predictive density is the hypothesis'
+ * likelihood, compared in the bank with the rows' (docs/model.md,
+ * "Trains that are not on Table 1"). Kalman engine only: its likelihood is
+ * exact there and comparable with the rows'. */
+#include <math.h>
+#include <string.h>
+
+#include "dist_impl.h"
+#include "internal.h"
+#include "refine.h"
+#include "track.h"
+
+#define NZ HSTPF_REFINE_NZ
+
+/* Prior of (c0, c1, c2): the moment-matched mixture of N(theta_l,
+ * diag(rho theta_l)^2) over the configured rows (mean mu, covariance cov,
+ * row-major 3x3). */
+static void prior(const hstpf_t *f, double *mu, double *cov)
+{
+    const uint16_t n = f->cfg.n_models;
+    const double rho = f->cfg.refine_spread;
+    uint16_t l;
+    int i, j;
+    memset(cov, 0, sizeof(double) * 9);
+    mu[0] = mu[1] = mu[2] = 0.0;
+    for (l = 0; l < n; ++l) {
+        const double th[3] = {f->theta[l].c0, f->theta[l].c1, f->theta[l].c2};
+        for (i = 0; i < 3; ++i) {
+            mu[i] += th[i] / n;
+        }
+    }
+    for (l = 0; l < n; ++l) {
+        const double th[3] = {f->theta[l].c0, f->theta[l].c1, f->theta[l].c2};
+        for (i = 0; i < 3; ++i) {
+            for (j = 0; j < 3; ++j) {
+                cov[3 * i + j] += (th[i] - mu[i]) * (th[j] - mu[j]) / n;
+            }
+            cov[4 * i] += rho * rho * th[i] * th[i] / n;
+        }
+    }
+}
+
+void hstpf__refine_place(hstpf_t *f, double s, double v, double pss, double psv, double pvv)
+{
+    hstpf_refine_t *r = &f->rf;
+    double mu[3], cov[9];
+    int i, j;
+    prior(f, mu, cov);
+    memset(r->kz, 0, sizeof r->kz);
+    memset(r->kp, 0, sizeof r->kp);
+    r->kz[0] = s;
+    r->kz[1] = v;
+    r->kz[2] = mu[0];
+    r->kz[3] = mu[1];
+    r->kz[4] = mu[2];
+    r->kz[5] = 1.0;
+    r->kp[0] = pss;
+    r->kp[1] = r->kp[NZ] = psv;
+    r->kp[NZ + 1] = pvv;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            r->kp[(2 + i) * NZ + 2 + j] = cov[3 * i + j];
+        }
+    }
+    r->kp[5 * NZ + 5] = f->cfg.refine_gain_sd * f->cfg.refine_gain_sd;
+    r->held = 0;
+}
+
+/* Keep the place of a previous posterior of theta and k (a re-acquisition
+ * keeps what was learnt about the train) and place only (s, v). */
+void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double psv, double pvv)
+{
+    hstpf_refine_t *r = &f->rf;
+    int i;
+    for (i = 0; i < NZ; ++i) {
+        r->kp[i] = r->kp[i * NZ] = 0.0;
+        r->kp[NZ + i] = r->kp[i * NZ + 1] = 0.0;
+    }
+    r->kz[0] = s;
+    r->kz[1] = v;
+    r->kp[0] = pss;
+    r->kp[1] = r->kp[NZ] = psv;
+    r->kp[NZ + 1] = pvv;
+    r->held = 0;
+}
+
+/* P = F P F' + Q with F the identity but for rows 0 and 1. */
+static void propagate(double *p, const double *f0, const double *f1, double qs, double qv)
+{
+    double fp[2][NZ], out[NZ * NZ];
+    int i, j;
+    memcpy(out, p, sizeof out);
+    for (j = 0; j < NZ; ++j) {
+        fp[0][j] = 0.0;
+        fp[1][j] = 0.0;
+        for (i = 0; i < NZ; ++i) {
+            fp[0][j] += f0[i] * p[i * NZ + j];
+            fp[1][j] += f1[i] * p[i * NZ + j];
+        }
+    }
+    /* rows 0, 1 of F P; then (F P) F' on columns 0, 1 */
+    for (j = 0; j < NZ; ++j) {
+        out[j] = fp[0][j];
+        out[NZ + j] = fp[1][j];
+    }
+    for (i = 0; i < NZ; ++i) {
+        const double *row = i == 0 ? fp[0] : (i == 1 ? fp[1] : p + i * NZ);
+        double a = 0.0, b = 0.0;
+        int k;
+        for (k = 0; k < NZ; ++k) {
+            a += row[k] * f0[k];
+            b += row[k] * f1[k];
+        }
+        out[i * NZ] = a;
+        out[i * NZ + 1] = b;
+    }
+    for (i = 0; i < NZ; ++i) {
+        for (j = 0; j < i; ++j) {
+            const double m = 0.5 * (out[i * NZ + j] + out[j * NZ + i]);
+            out[i * NZ + j] = out[j * NZ + i] = m;
+        }
+    }
+    out[0] += qs;
+    out[NZ + 1] += qv;
+    memcpy(p, out, sizeof out);
+}
+
+void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
+{
+    const hstpf_config_t *c = &f->cfg;
+    hstpf_refine_t *r = &f->rf;
+    double *z = r->kz, *p = r->kp;
+    const double dt = st->dt, sc2 = st->scale * st->scale, xi = f->xi;
+    const double v = z[1], vk = 3.6 * v, c0 = z[2], c1 = z[3], c2 = z[4], k = z[5];
+    double g = 0.0, a, vd;
+    double f0[NZ] = {1.0, 0.0, 0.0, 0.0, 0.0, 0.0}, f1[NZ];
+    int i;
+    if (c->n_track > 0u) {
+        g = (double)hstpf__track_acc(f, &r->track_hint, (hstpf_real_t)z[0]);
+    }
+    /* st->xu = xi u: the gain k scales the reported traction */
+    a = k * st->xu - xi * (c0 + c1 * vk + c2 * vk * vk) - g;
+    vd = v + dt * a;
+    f0[1] = dt;
+    r->held = (uint8_t)(v <= 0.0 && p[NZ + 1] <= 0.0 && a <= 0.0);
+    if (r->held) {
+        r->loglik = 0.0;
+    } else if (vd < 0.0) {
+        /* comes to rest within the step: v' = 0 exactly, no speed spread */
+        r->held = 1;
+        for (i = 0; i < NZ; ++i) {
+            f1[i] = 0.0;
+        }
+        z[0] += dt * v + st->scale * c->noise_s.mean;
+        z[1] = 0.0;
+        propagate(p, f0, f1, sc2 * c->noise_s.sd * c->noise_s.sd, 0.0);
+    } else {
+        f1[0] = 0.0;
+        f1[1] = 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
+        f1[2] = -dt * xi;
+        f1[3] = -dt * xi * vk;
+        f1[4] = -dt * xi * vk * vk;
+        f1[5] = dt * st->xu;
+        z[0] += dt * v + st->scale * c->noise_s.mean;
+        z[1] = vd + st->scale * c->noise_v.mean;
+        propagate(p, f0, f1, sc2 * c->noise_s.sd * c->noise_s.sd, sc2 * c->noise_v.sd * c->noise_v.sd);
+    }
+    r->loglik = 0.0;
+    if (st->has_y) {
+        const double sy = p[0] + c->noise_e.sd * c->noise_e.sd, sd = sqrt(sy);
+        const double depth = (double)(f->de.lp_max - f->de.floor), zf = sqrt(2.0 * depth);
+        double zz = (st->yr - c->noise_e.mean - z[0]) / sd, az = fabs(zz), ll, gain[NZ];
+        int j;
+        if (az <= zf) {
+            ll = -0.5 * zz * zz;
+        } else {
+            ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
+            zz = zz > 0.0 ? zf : -zf; /* Huber: the update sees the clipped innovation */
+        }
+        r->loglik = ll - 0.5 * log(6.283185307179586 * sy);
+        r->nis = 0.98 * r->nis + 0.02 * zz * zz;
+        for (i = 0; i < NZ; ++i) {
+            gain[i] = p[i * NZ] / sy;
+        }
+        for (i = 0; i < NZ; ++i) {
+            z[i] += gain[i] * zz * sd;
+        }
+        for (i = 0; i < NZ; ++i) {
+            for (j = 0; j < NZ; ++j) {
+                p[i * NZ + j] -= gain[i] * gain[j] * sy;
+            }
+        }
+        for (i = 0; i < NZ; ++i) {
+            p[i * NZ + i] = p[i * NZ + i] > 0.0 ? p[i * NZ + i] : 0.0;
+        }
+    }
+    z[1] = z[1] > 0.0 ? z[1] : 0.0; /* a train never reverses */
+    if (z[1] == 0.0 && r->held) {
+        for (i = 0; i < NZ; ++i) {
+            p[NZ + i] = p[i * NZ + 1] = 0.0;
+        }
+    }
+}
+
+void hstpf__refine_theta(const hstpf_t *f, double *th, double *cov)
+{
+    const hstpf_refine_t *r = &f->rf;
+    int i, j;
+    for (i = 0; i < 3; ++i) {
+        th[i] = r->kz[2 + i] > 0.0 ? r->kz[2 + i] : 0.0;
+        for (j = 0; j < 3; ++j) {
+            cov[3 * i + j] = r->kp[(2 + i) * NZ + 2 + j];
+        }
+    }
+}

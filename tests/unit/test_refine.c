@@ -1,0 +1,157 @@
+/* The continuous-theta hypothesis (cfg.refine, issue 10): the W(v) band by
+ * hand, no "no type fits" for a train that is on the table, and "no type
+ * fits" for an unmodelled 20 per-mille gradient; the simulator's journey
+ * (five stations) with Case 1 noise. */
+#include <string.h>
+
+#include "hstpf_sim.h"
+#include "testutil.h"
+
+static hstpf_t filt;
+
+static const hstpf_sim_leg_t legs[] = {
+    {300.0, 250.0, 120.0}, {250.0, 200.0, 120.0}, {300.0, 250.0, 120.0}, {200.0, 150.0, 120.0}, {300.0, 200.0, 120.0}};
+
+/* W = h'theta, sd^2 = h' C h with h = (1, V, V^2): at V = 100 km/h and
+ * theta = (1, 0.01, 1e-4), W = 3; with C = diag(0.01, 1e-6, 1e-10) each
+ * term adds 0.01 to the variance, and the off-diagonal 1e-8 (c0, c1) adds
+ * 2 x 100 x 1e-8 = 2e-6. */
+static void test_band_by_hand(void **state)
+{
+    hstpf_estimate_t e;
+    double w, sd;
+    (void)state;
+    memset(&e, 0, sizeof e);
+    e.theta[0] = 1.0f;
+    e.theta[1] = 0.01f;
+    e.theta[2] = 1e-4f;
+    e.theta_cov[0] = 0.01f;
+    e.theta_cov[1] = 1e-8f;
+    e.theta_cov[3] = 1e-6f;
+    e.theta_cov[5] = 1e-10f;
+    assert_int_equal(hstpf_resistance_band(&e, 100.0 / 3.6, &w, &sd), HSTPF_OK);
+    TU_CLOSE(w, 3.0, 1e-5);
+    TU_CLOSE(sd, sqrt(0.03 + 2e-6), 1e-6);
+    assert_int_equal(hstpf_resistance_band(&e, NAN, &w, &sd), HSTPF_E_NONFINITE);
+    assert_int_equal(hstpf_resistance_band(NULL, 1.0, &w, &sd), HSTPF_E_NULL);
+}
+
+/* A 41-minute line, 17 rows in the bank; returns the last estimate and
+ * checks on every step that "no type fits" and a declaration exclude each
+ * other. */
+static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
+                     uint64_t seed, hstpf_estimate_t *e, int *ever_nofit)
+{
+    hstpf_config_t c;
+    hstpf_sim_config_t sc;
+    hstpf_sim_t sim;
+    hstpf_sim_sample_t smp;
+    int k;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    c.refine = 1;
+    c.models = hstpf_train_types;
+    c.n_models = HSTPF_N_TRAIN_TYPES;
+    c.seed = seed;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    hstpf_sim_default(&sc);
+    sc.truth = *truth;
+    sc.seed = 100 + seed;
+    sc.profile = HSTPF_PROFILE_JOURNEY;
+    sc.legs = legs;
+    sc.n_legs = 5;
+    sc.first_dwell_s = 30.0;
+    sc.track = track;
+    sc.n_track = n_track;
+    hstpf_sim_init(&sim, &sc);
+    *ever_nofit = 0;
+    for (k = 0; k < 2460; ++k) {
+        hstpf_input_t in;
+        hstpf_sim_next_input(&sim, &smp, &in);
+        (void)hstpf_step(&filt, &in);
+        assert_int_equal(hstpf_estimate(&filt, e), HSTPF_OK);
+        if (e->fit == HSTPF_FIT_NONE) {
+            *ever_nofit = 1;
+            assert_int_equal(e->declared, -1);
+            assert_true(e->off_what != 0u);
+        }
+        assert_true(e->q_offtable >= 0.0f && e->q_offtable <= 1.0f);
+    }
+}
+
+/* On the table: never "no type fits", and the published W(v) band covers
+ * the truth at 0, 50, ..., 350 km/h. */
+static void test_on_table(void **state)
+{
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit, j;
+    (void)state;
+    run_line(&truth, NULL, 0, 3, &e, &nofit);
+    assert_int_equal(nofit, 0);
+    assert_true(e.q_offtable < 0.05f);
+    for (j = 0; j <= 7; ++j) {
+        const double v = 50.0 * j / 3.6;
+        double w, sd;
+        assert_int_equal(hstpf_resistance_band(&e, v, &w, &sd), HSTPF_OK);
+        assert_true(fabs(w - hstpf_resistance(&truth, v)) <= 1.96 * sd + 1e-9);
+    }
+}
+
+/* An unmodelled 20 per-mille climb adds 20 N/kN to every row's W: no row
+ * fits, the continuous hypothesis takes the weight, no type is declared, and
+ * the refined theta carries the offset (W(0) well above every row's c0). */
+static void test_gradient_no_fit(void **state)
+{
+    static const hstpf_track_seg_t climb[] = {{0.0, 20.0, 0.0}};
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit;
+    double w, sd;
+    (void)state;
+    run_line(&truth, climb, 1, 4, &e, &nofit);
+    assert_int_equal(nofit, 1);
+    assert_int_equal(e.fit, HSTPF_FIT_NONE);
+    assert_true(e.q_offtable > 0.99f);
+    assert_int_equal(e.declared, -1);
+    assert_int_equal(hstpf_resistance_band(&e, 0.0, &w, &sd), HSTPF_OK);
+    assert_true(w > 5.0); /* every row's c0 is below 3 N/kN */
+}
+
+/* Off by default: no continuous hypothesis, gain 1, weights of the rows
+ * sum to 1. */
+static void test_off_by_default(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    hstpf_input_t in;
+    uint16_t l;
+    double sum = 0.0;
+    (void)state;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    assert_int_equal(c.refine, 0);
+    c.models = hstpf_train_types;
+    c.n_models = 3;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    memset(&in, 0, sizeof in);
+    in.dt_s = 1.0;
+    in.has_position = 1;
+    assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
+    assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+    for (l = 0; l < e.n_models; ++l) {
+        sum += (double)e.model[l].q;
+    }
+    TU_CLOSE(sum, 1.0, 1e-6);
+    TU_CLOSE(e.q_offtable, 0.0, 0.0);
+    TU_CLOSE(e.gain, 1.0, 0.0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_band_by_hand),
+        cmocka_unit_test(test_on_table),
+        cmocka_unit_test(test_gradient_no_fit),
+        cmocka_unit_test(test_off_by_default),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
