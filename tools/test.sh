@@ -3,13 +3,15 @@
 # only when it fails (its full log stays in build-logs/). The closing tally
 # is printed whether the run passes or stops at a failure.
 #
-#   host        gcc Release build, ctest (all but the VM test, run once in
-#               the coverage stage)
+#   host        gcc Release build, ctest (the VM test of the socket path
+#               included)
 #   sanitizers  ASan + UBSan (with float-cast-overflow) build, ctest
 #   python      the Python tests
 #   gates       gcc and clang, C99 and C11, lib/ with -m32, all -Werror
-#   coverage    --coverage build, ctest with the VM test (socketcan.c),
-#               branch coverage of lib/ and port/src/ against the floors
+#   coverage    --coverage build, ctest, branch coverage of lib/ and
+#               port/src/ against the floors; the VM test runs again there
+#               only to count socketcan.c (its timing bounds are not met by
+#               an -O0 instrumented daemon under emulation: not decisive)
 #   fuzz        each libFuzzer target for HSTPF_FUZZ_SECONDS (default 60)
 #               under ASan + UBSan with float-cast-overflow (clang)
 #   hil         hstpfd on vcan0 replaying a run (natively or in the VM)
@@ -83,9 +85,9 @@ ctest_summary() {
 host() {
   cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release &&
     cmake --build build -j "$jobs" &&
-    ctest --test-dir build --output-on-failure -j "$jobs" -LE vcan || return 1
-  ctest_summary build -LE vcan
-  echo "$(ctest --test-dir build -N -LE vcan | tail -1 | sed 's/Total Tests: //') tests passed (the VM test runs in the coverage stage)"
+    ctest --test-dir build --output-on-failure -j "$jobs" || return 1
+  ctest_summary build
+  echo "$(ctest --test-dir build -N | tail -1 | sed 's/Total Tests: //') tests passed"
 }
 
 sanitizers() {
@@ -117,10 +119,12 @@ coverage() {
   cmake -S . -B build-cov -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS=--coverage &&
     cmake --build build-cov -j "$jobs" || return 1
   find build-cov -name '*.gcda' -delete
-  # the known failures run too (their code paths count); their results do
-  # not decide the stage, the host stage checks them
-  ctest --test-dir build-cov --output-on-failure -j "$jobs" -LE 'known-' || return 1
+  ctest --test-dir build-cov --output-on-failure -j "$jobs" -LE 'known-|vcan' || return 1
+  # counted, not decisive (the host stage decides them): the known failures,
+  # and the VM test, whose guest writes its .gcda files into build-cov
+  # through the host file system it mounts
   ctest --test-dir build-cov -L 'known-' >/dev/null
+  ctest --test-dir build-cov -L vcan >/dev/null || echo "note: the VM test failed in the instrumented build (counted anyway)"
   cmake/coverage.sh build-cov
 }
 

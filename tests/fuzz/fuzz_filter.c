@@ -3,8 +3,8 @@
  * error code; a refused init or step leaves the instance usable; the
  * estimate can always be read; when it says valid, every published field
  * is finite and within the header's ranges, the weights a distribution.
- * Pending (HSTPF_FUZZ_PENDING=1, issue 11 classes 1-2): after an accepted
- * step with lock, the blended position and speed are finite. */
+ * After an accepted step with a fix the blended position and speed are
+ * finite (issue 11, classes 1-2). */
 #include <math.h>
 
 #include "fuzz.h"
@@ -60,8 +60,7 @@ static void check_estimate(const hstpf_estimate_t *e, uint16_t n_models)
     FUZZ_CHECK(e->n_models == n_models, "n_models %u", (unsigned)e->n_models);
     FUZZ_CHECK(e->status <= HSTPF_STATUS_WITHDRAWN, "status %d", (int)e->status);
     FUZZ_CHECK(e->declared >= -1 && e->declared < (int)n_models, "declared %d", (int)e->declared);
-    FUZZ_CHECK((e->declared >= 0) == (e->status == HSTPF_STATUS_DECLARED || e->status == HSTPF_STATUS_CHANGED) ||
-                   !fuzz_pending(),
+    FUZZ_CHECK((e->declared >= 0) == (e->status == HSTPF_STATUS_DECLARED || e->status == HSTPF_STATUS_CHANGED),
                "declared %d with status %d", (int)e->declared, (int)e->status);
     if (!e->valid) {
         return;
@@ -173,7 +172,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         FUZZ_CHECK(known_error(rc), "hstpf_step returned %d", (int)rc);
         FUZZ_CHECK(hstpf_estimate(&filt, &est) == HSTPF_OK, "estimate after step");
         check_estimate(&est, cfg.n_models);
-        if (fuzz_pending() && rc == HSTPF_OK && u.has_position) {
+        if (rc == HSTPF_OK && u.has_position) { /* issue 11, class 2 (fixed) */
             FUZZ_CHECK(isfinite(est.position_m) && isfinite((double)est.speed_mps),
                        "step %u accepted a fix, estimate position %g speed %g", steps, est.position_m,
                        (double)est.speed_mps);

@@ -5,8 +5,9 @@
  * Invariants: every result is one the API documents; accepted exactly
  * when E2E says so; an accepted input's value is the one sent; a clean
  * in-sequence frame is accepted; an output frame carries a correct CRC
- * and counter; and (pending, issue 11) an estimate frame marked valid
- * holds finite, unclamped values. */
+ * and counter; an estimate frame marked valid holds finite, unclamped
+ * values the estimator called valid, and a non-finite or clamped one with
+ * a fix carries the fault bit (issue 11, classes 1 and 4). */
 #include <math.h>
 
 #include "frames.h"
@@ -55,11 +56,16 @@ static void check_tx(const hstpfd_frame_t *f, unsigned i, const hstpfd_tx_values
     if (i == 0u) {
         struct hstpf_can_est_state_t m;
         FUZZ_CHECK(hstpf_can_est_state_unpack(&m, f->data, f->len) == 0, "EstState unpack");
-        if (fuzz_pending() && m.est_valid == HSTPF_CAN_EST_STATE_EST_VALID_VALID_CHOICE) {
-            /* issue 11, classes 1 and 4: nothing non-finite or clamped leaves marked valid */
-            FUZZ_CHECK(isfinite(v->position_m) && isfinite(v->speed_mps) && fabs(v->position_m) <= 21474836.47 &&
-                           fabs(v->speed_mps) <= 327.67,
-                       "EstValid=1 with position %g m, speed %g m/s", v->position_m, v->speed_mps);
+        {
+            /* issue 11, classes 1 and 4 (fixed): nothing non-finite or clamped
+             * leaves marked valid, and such a value with a fix is a fault */
+            const int in_range = isfinite(v->position_m) && isfinite(v->speed_mps) &&
+                                 fabs(v->position_m) <= 21474836.47 && fabs(v->speed_mps) <= 327.67;
+            FUZZ_CHECK(m.est_valid != HSTPF_CAN_EST_STATE_EST_VALID_VALID_CHOICE || (in_range && v->valid),
+                       "EstValid=1 with position %g m, speed %g m/s, valid %u", v->position_m, v->speed_mps,
+                       (unsigned)v->valid);
+            FUZZ_CHECK(!v->have_fix || in_range || m.est_fault == HSTPF_CAN_EST_STATE_EST_FAULT_CLAMPED_CHOICE,
+                       "position %g m, speed %g m/s sent without EstFault", v->position_m, v->speed_mps);
         }
     }
 }
@@ -159,7 +165,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             hstpfd_tx_values_t v;
             const unsigned i = fuzz_u8(&in) % HSTPFD_N_OUTPUTS;
             memset(&v, 0, sizeof v);
-            v.have_fix = (uint8_t)(fuzz_u8(&in) & 1u);
+            {
+                const uint8_t hf = fuzz_u8(&in);
+                v.have_fix = (uint8_t)(hf & 1u);
+                v.valid = (uint8_t)!(hf & 2u); /* mostly claimed valid: the frame must not believe it */
+            }
             v.position_m = fuzz_double(&in, -3e7, 3e7);
             v.speed_mps = fuzz_double(&in, -400.0, 400.0);
             v.status = (hstpf_status_t)(fuzz_u8(&in) % 4u);
