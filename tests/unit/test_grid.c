@@ -69,9 +69,6 @@ static void setup(int paper_case, uint64_t seed, hstpf_sim_config_t *sc, hstpf_c
     c->noise_v = sc->noise_v;
     c->noise_e = sc->noise_e;
     c->engine = HSTPF_ENGINE_GRID;
-    /* the train starts from rest: the single-fix speed prior, so that the
-     * grid and the references start from the same product prior */
-    c->init_speed_sd = 1.0;
 }
 
 /* After every step the cells are a normalised density; after a step
