@@ -59,8 +59,10 @@ term_ms=$(( (t1 - t0) / 1000000 ))
 echo "vcan_daemon: SIGTERM to exit in the poll loop: $term_ms ms"
 kill $dump 2>/dev/null || true; wait $dump 2>/dev/null || true
 [ $rc -eq 0 ] || fail "hstpfd exit status $rc after SIGTERM"
-# 100 ms natively (tests/port/test_daemon.c); the VM emulates every instruction
-[ "$term_ms" -le "${HSTPF_TERM_MS_MAX:-1000}" ] || fail "SIGTERM took $term_ms ms"
+# 100 ms is asserted natively (tests/port/test_daemon.c: 4-12 ms measured);
+# here it only must end the poll loop: the VM emulates every instruction
+# (10-50x slower, more on a busy machine: 1180 ms seen at load 10)
+[ "$term_ms" -le "${HSTPF_TERM_MS_MAX:-5000}" ] || fail "SIGTERM took $term_ms ms"
 grep -q "$iface: reopened" "$tmp/hstpfd.err" || fail "no reopen message"
 cat "$tmp/play.err"
 
