@@ -59,9 +59,10 @@ for name in ("clean", "faults"):
     s = json.load(open(f"{tmp}/{name}.summary.json"))
     sc = json.load(open(f"{tmp}/{name}.score.json"))
     check(s["declared"] == "CRH3", f"{name}: declared {s['declared']} (CRH3)")
-    # Monte Carlo, Case 1: the worst of 100 seeds declares at 359 s
-    # (docs/results.md); 500 s leaves room for the VM's timing jitter
-    check(0 < s["decision_time_s"] <= 500, f"{name}: decision at {s['decision_time_s']} s (<= 500 s)")
+    # Monte Carlo, Case 1 with the library's defaults (the continuous-theta
+    # hypothesis on): the worst of 100 seeds crosses at 707 s
+    # (docs/results.md); 800 s leaves room for the VM's timing jitter
+    check(0 < s["decision_time_s"] <= 800, f"{name}: decision at {s['decision_time_s']} s (<= 800 s)")
     th = s["theta"]
     err = max(abs(th[0] - 0.79) / 0.79, abs(th[1] - 0.0064) / 0.0064, abs(th[2] - 0.000115) / 0.000115)
     check(err < 0.05, f"{name}: theta within 5 % of CRH3 ({100 * err:.2f} %)")
