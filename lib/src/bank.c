@@ -82,6 +82,8 @@ static void reset_state(hstpf_t *f)
     f->acquisitions = 0;
     f->nonfinite_resets = 0;
     f->standstill = 0;
+    f->weights_wait = 0;
+    f->arrival_s = 0.0;
     f->outlier_run = 0;
     f->lost_run = 0;
 }
@@ -213,6 +215,8 @@ static void drop_lock(hstpf_t *f, int keep_pend)
     f->have_fix = 0;
     f->have_pend = (uint8_t)(keep_pend && f->have_pend);
     f->standstill = 0;
+    f->weights_wait = 0;
+    f->arrival_s = 0.0;
     f->lost_run = 0;
 }
 
@@ -485,18 +489,34 @@ static void nonfinite_reset(hstpf_t *f)
 }
 
 /* Standstill: every model that carries weight is held at rest. The data
- * then say nothing about W(v) (docs/model.md), so no model weight moves. */
-static int at_standstill(const hstpf_t *f)
+ * then say nothing about W(v) (docs/model.md), so no model weight moves.
+ * Arrival: some weighted models hold the train at rest while others still
+ * move it, a few tenths of a m/s apart. A fix then scores "has it stopped
+ * yet", which the fix noise decides, not W(v): the weights wait until the
+ * models agree, for at most HSTPF__ARRIVAL_MAX_S (a train that really
+ * moves then releases them). Returns 2 at standstill, 1 arriving, else 0. */
+static int weights_hold(hstpf_t *f, double dt)
 {
     double wb[HSTPF_MAX_MODELS + 1];
-    uint16_t l;
+    uint16_t l, held = 0, moving = 0;
     blend_weights(f, wb);
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        if (wb[l] > 0.0 && !f->m[l].held) {
-            return 0;
+    for (l = 0; l <= f->cfg.n_models; ++l) {
+        const uint8_t h = l < f->cfg.n_models ? f->m[l].held : f->rf.held;
+        if (wb[l] > 0.0) {
+            held = (uint16_t)(held + (h != 0));
+            moving = (uint16_t)(moving + (h == 0));
         }
     }
-    return !(wb[f->cfg.n_models] > 0.0 && !f->rf.held);
+    if (moving == 0u) {
+        f->arrival_s = 0.0;
+        return 2;
+    }
+    if (held == 0u) {
+        f->arrival_s = 0.0;
+        return 0;
+    }
+    f->arrival_s += dt;
+    return f->arrival_s <= HSTPF__ARRIVAL_MAX_S ? 1 : 0;
 }
 
 static int all_lost(const hstpf_t *f)
@@ -550,6 +570,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             (void)acquire(f, in->position_m, f->xi * in->traction);
         }
         f->standstill = 0;
+        f->weights_wait = 0;
         update_declaration(f, in->dt_s, 0);
         return HSTPF_OK;
     }
@@ -589,14 +610,18 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (f->rf.active) {
         hstpf__refine_update(f, &st);
     }
-    f->standstill = (uint8_t)at_standstill(f);
+    {
+        const int hold = weights_hold(f, in->dt_s);
+        f->standstill = (uint8_t)(hold == 2);
+        f->weights_wait = (uint8_t)(hold != 0);
+    }
     if (has_y) {
         /* every model that carries weight put this fix beyond its floor:
          * the fixes and the estimate disagree (a train moving although
          * held, a time base that broke); a run of these re-acquires */
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + 1u) : 0u;
     }
-    if (has_y && !f->standstill) {
+    if (has_y && !f->weights_wait) {
         update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {
@@ -611,7 +636,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         update_declaration(f, in->dt_s, 0);
         return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
     }
-    update_declaration(f, in->dt_s, has_y && !f->standstill);
+    update_declaration(f, in->dt_s, has_y && !f->weights_wait);
     rebase(f);
     if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {
         ++f->reacquired;

@@ -6,6 +6,10 @@
 #include "hstpf/hstpf.h"
 
 #define HSTPF_MAGIC 0x48535446u /* "HSTF": set by hstpf_init */
+/* Longest arrival at rest (some weighted models held, others moving) over
+ * which the weights wait, s: braking from the speeds where the models
+ * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
+#define HSTPF__ARRIVAL_MAX_S 10.0
 #define HSTPF_G_ACC 9.81        /* m/s^2 */
 
 /* The full range check of a configuration (config.c); *field names the

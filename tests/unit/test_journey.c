@@ -423,6 +423,57 @@ static void test_nonfinite_reset(void **state)
     }
 }
 
+/* Arrival at rest (docs/model.md, standstill rule 3): a model with a large
+ * c0 stops seconds before one with the truth's c0 while the fixes still
+ * show the train rolling. While one weighted model holds the train and the
+ * other moves it, the weights wait; for HSTPF__ARRIVAL_MAX_S = 10 s at
+ * most: a train that goes on moving then takes the weight off the model
+ * that stopped. Coasting (u = 0) from 2 m/s, the truth's resistance
+ * (CRH3) stops it only after minutes; the second model's c0 = 30 N/kN
+ * stops it within 8 s (a = -xi c0 = -0.28 m/s^2). */
+static void test_arrival_waits(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e, before;
+    hstpf_theta_t *const two = models; /* check_estimate() reads models[] */
+    int k, mixed = 0, moved_while_mixed = 0, first_mixed = -1;
+    (void)state;
+    two[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    two[1] = two[0];
+    two[1].c0 = 30.0;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    c.models = two;
+    c.n_models = 2;
+    c.engine = HSTPF_ENGINE_KALMAN;
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 500.0, 2.0, 21);
+    t.sd_s = 0.0; /* a smooth roll, so the truth itself keeps moving */
+    t.sd_v = 0.0;
+    memset(&before, 0, sizeof before);
+    for (k = 0; k < 80; ++k) {
+        step(1.0, 0.0, truth_fix(&t), 1);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (k > 2 && e.model[1].speed_mps == 0.0f && e.model[0].speed_mps > 0.0f && e.model[1].q > 0.01f) {
+            first_mixed = first_mixed < 0 ? k : first_mixed;
+            if (k - first_mixed < 9) { /* inside the 10 s: not a bit moves */
+                ++mixed;
+                moved_while_mixed += tv(&e, &before) != 0.0;
+            }
+        }
+        before = e;
+        truth_step(&t, 0.0);
+    }
+    print_message("arrival: %d mixed steps, q = %.4f %.4f off-table %.4f\n", mixed, (double)e.model[0].q,
+                  (double)e.model[1].q, (double)e.q_offtable);
+    assert_true(t.v > 1.0);        /* the truth never stopped */
+    assert_true(mixed >= 5);       /* the case arose */
+    assert_int_equal(moved_while_mixed, 0);
+    assert_true(e.model[1].q < 0.01f); /* and the data decided after it */
+    assert_true(e.model[0].q > 0.5f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -430,7 +481,7 @@ int main(void)
         cmocka_unit_test(test_start_at_speed_kalman), cmocka_unit_test(test_start_at_speed_particle),
         cmocka_unit_test(test_clock_steps_kalman),    cmocka_unit_test(test_clock_steps_particle),
         cmocka_unit_test(test_outage_sd_grows),       cmocka_unit_test(test_declaration_states),
-        cmocka_unit_test(test_held_but_moving),
+        cmocka_unit_test(test_held_but_moving),       cmocka_unit_test(test_arrival_waits),
         cmocka_unit_test(test_nonfinite_reset),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -451,6 +451,8 @@ typedef struct {
     uint8_t have_fix;                /* locked: acquired and tracking */
     uint8_t have_pend;               /* one fix waiting for a second to acquire */
     uint8_t standstill;              /* this step's model weights were held */
+    uint8_t weights_wait;            /* held or arriving: this step's weights did not move */
+    double arrival_s;                /* time the weighted models disagreed on being at rest */
     uint8_t ever_locked;
     double pend_y;                   /* that fix, absolute m */
     double pend_age_s;               /* time since it */
