@@ -8,10 +8,13 @@
  * Gaussian noise), a deterministic grid filter (any noise, no Monte Carlo
  * noise; docs/grid.md) or a particle filter (any noise). See docs/model.md.
  *
- * Sources (lib/src): bank.c (life cycle, step, model weights, declaration,
- * blend), engine.h (the interface every engine implements),
- * engine_kalman.c, engine_grid.c, engine_particle.c, config.c (defaults and the one table
- * of ranges), track.c (gradient and curve profile), dist.c, rng.c.
+ * Sources (lib/src): bank.c (life cycle, step, model weights, standstill),
+ * lock.c (acquisition and re-acquisition), declare.c (the declaration state
+ * machine, "no type fits"), estimate.c (the published blend, its sd and
+ * validity), engine.h (the interface every engine implements),
+ * engine_kalman.c, engine_grid.c, engine_particle.c, refine.c (the
+ * continuous-theta hypothesis), config.c (defaults and the one table of
+ * ranges), track.c (gradient and curve profile), dist.c, rng.c.
  *
  * Model, per step of length T seconds (units: docs/model.md):
  *   s' = s + T v + w_s

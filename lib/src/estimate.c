@@ -1,0 +1,220 @@
+/* The published estimate: the blend over the models (weights less the
+ * floor), the mixture's sd, theta with its covariance and the W(v) band,
+ * and the validity of every published value. */
+#include <math.h>
+#include <string.h>
+
+#include "bank.h"
+#include "refine.h"
+
+/* Weights for blended estimates: q less the floor, normalised, for the
+ * rows (wb[0..n-1]) and the continuous hypothesis (wb[n], 0 when off). The
+ * floor keeps a model able to recover; it must not let a model that lost
+ * the train pull the estimates. */
+void hstpf__blend_weights(const hstpf_t *f, double *wb)
+{
+    const uint16_t n = f->cfg.n_models, nh = hstpf__n_hyp(f);
+    double sum = 0.0;
+    uint16_t l;
+    wb[n] = 0.0;
+    for (l = 0; l < nh; ++l) {
+        const double q = exp(l < n ? f->m[l].logq : f->rf.logq) - f->cfg.q_floor;
+        wb[l] = q > 0.0 ? q : 0.0;
+        sum += wb[l];
+    }
+    for (l = 0; l < nh; ++l) {
+        wb[l] = sum > 0.0 ? wb[l] / sum : 1.0 / (double)nh;
+    }
+}
+
+double hstpf__blended_position(const hstpf_t *f, double dt_ahead)
+{
+    double s = 0.0, wb[HSTPF_MAX_MODELS + 1];
+    uint16_t l;
+    hstpf__blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        s += wb[l] * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
+    }
+    s += wb[f->cfg.n_models] * (f->rf.kz[0] + dt_ahead * f->rf.kz[1]);
+    return s;
+}
+
+/* Every published value finite and within the header's ranges. */
+static int in_ranges(const hstpf_estimate_t *o)
+{
+    const double vals[] = {o->position_m, (double)o->speed_mps, o->position_sd_m, (double)o->speed_sd_mps,
+                           (double)o->theta[0], (double)o->theta[1], (double)o->theta[2],
+                           (double)o->resistance};
+    uint32_t i;
+    for (i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
+        if (!hstpf__fin(vals[i])) {
+            return 0;
+        }
+    }
+    return fabs(o->position_m) <= HSTPF_POS_MAX_M && o->speed_mps >= (real)0 &&
+           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->position_sd_m >= 0.0 &&
+           o->speed_sd_mps >= (real)0 && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
+           o->theta[2] >= (real)0;
+}
+
+/* The published theta and its covariance: the mixture of the rows (points)
+ * and the continuous hypothesis (Gaussian); a declared row is a point. */
+static void theta_mixture(const hstpf_t *f, const double *wb, double *th, double *cov)
+{
+    const uint16_t n = f->cfg.n_models;
+    double rth[3] = {0.0, 0.0, 0.0}, rcov[9];
+    uint16_t l;
+    int i, j;
+    memset(cov, 0, sizeof(double) * 9);
+    th[0] = th[1] = th[2] = 0.0;
+    if (f->declared >= 0) {
+        /* Table 2, State A(2): the declared type's own coefficients */
+        th[0] = f->theta[f->declared].c0;
+        th[1] = f->theta[f->declared].c1;
+        th[2] = f->theta[f->declared].c2;
+        return;
+    }
+    if (f->rf.active) {
+        hstpf__refine_theta(f, rth, rcov);
+    }
+    for (l = 0; l < n; ++l) {
+        th[0] += wb[l] * f->theta[l].c0;
+        th[1] += wb[l] * f->theta[l].c1;
+        th[2] += wb[l] * f->theta[l].c2;
+    }
+    for (i = 0; i < 3; ++i) {
+        th[i] += wb[n] * rth[i];
+    }
+    for (l = 0; l <= n; ++l) {
+        const double d[3] = {(l < n ? f->theta[l].c0 : rth[0]) - th[0],
+                             (l < n ? f->theta[l].c1 : rth[1]) - th[1],
+                             (l < n ? f->theta[l].c2 : rth[2]) - th[2]};
+        if (!(wb[l] > 0.0)) {
+            continue;
+        }
+        for (i = 0; i < 3; ++i) {
+            for (j = 0; j < 3; ++j) {
+                cov[3 * i + j] += wb[l] * (d[i] * d[j] + (l < n ? 0.0 : rcov[3 * i + j]));
+            }
+        }
+    }
+}
+
+int32_t hstpf_resistance_band(const hstpf_estimate_t *e, double v_mps, double *w, double *sd)
+{
+    double h[3], var = 0.0;
+    const double *c;
+    double cv[6];
+    int i, j;
+    static const uint8_t idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    if (e == NULL || w == NULL || sd == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (!hstpf__fin(v_mps)) {
+        return HSTPF_E_NONFINITE;
+    }
+    h[0] = 1.0;
+    h[1] = 3.6 * v_mps;
+    h[2] = h[1] * h[1];
+    for (i = 0; i < 6; ++i) {
+        cv[i] = (double)e->theta_cov[i];
+    }
+    c = cv;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            var += h[i] * h[j] * c[idx[i][j]];
+        }
+    }
+    *w = (double)e->theta[0] + (double)e->theta[1] * h[1] + (double)e->theta[2] * h[2];
+    *sd = sqrt(var > 0.0 ? var : 0.0);
+    return HSTPF_OK;
+}
+
+int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
+{
+    uint16_t l;
+    double s = 0.0, v = 0.0, vs = 0.0, vv = 0.0, th[3] = {0.0, 0.0, 0.0}, cov[9];
+    double wb[HSTPF_MAX_MODELS + 1];
+    int16_t best = 0;
+    if (f == NULL || out == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    memset(out, 0, sizeof *out);
+    out->step = f->steps;
+    out->time_s = f->time_s;
+    out->n_models = f->cfg.n_models;
+    hstpf__blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        hstpf_model_out_t *o = &out->model[l];
+        o->q = (real)exp(m->logq);
+        o->position_m = f->origin_m + (double)m->s_mean;
+        o->speed_mps = m->v_mean;
+        o->ess = m->ess;
+        o->loglik = m->loglik;
+        o->floor_hits = m->floor_hits;
+        o->reacquired = m->reacquired;
+        s += wb[l] * (double)m->s_mean;
+        v += wb[l] * (double)m->v_mean;
+        if (m->logq > f->m[best].logq) {
+            best = (int16_t)l;
+        }
+    }
+    s += wb[f->cfg.n_models] * f->rf.kz[0];
+    v += wb[f->cfg.n_models] * f->rf.kz[1];
+    /* the mixture's variance: within each model plus between the models */
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const double ds = (double)m->s_mean - s, dv = (double)m->v_mean - v;
+        vs += wb[l] * ((double)m->s_var + ds * ds);
+        vv += wb[l] * ((double)m->v_var + dv * dv);
+    }
+    if (f->rf.active) {
+        const double wr = wb[f->cfg.n_models], ds = f->rf.kz[0] - s, dv = f->rf.kz[1] - v;
+        vs += wr * (f->rf.kp[0] + ds * ds);
+        vv += wr * (f->rf.kp[HSTPF_REFINE_NZ + 1] + dv * dv);
+        out->q_offtable = (real)exp(f->rf.logq);
+        out->gain = (real)f->rf.kz[5];
+        out->gain_sd = (real)sqrt(f->rf.kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ - 1]);
+    } else {
+        out->gain = 1;
+    }
+    theta_mixture(f, wb, th, cov);
+    out->theta_cov[0] = (real)cov[0];
+    out->theta_cov[1] = (real)cov[1];
+    out->theta_cov[2] = (real)cov[2];
+    out->theta_cov[3] = (real)cov[4];
+    out->theta_cov[4] = (real)cov[5];
+    out->theta_cov[5] = (real)cov[8];
+    out->fit = (hstpf_fit_t)f->fit;
+    out->off_what = f->fit == (uint8_t)HSTPF_FIT_NONE ? hstpf__off_what(f) : 0u;
+    out->position_m = f->ever_locked ? f->origin_m + s : (f->have_pend ? f->pend_y : 0.0);
+    out->speed_mps = (real)v;
+    out->position_sd_m = sqrt(vs > 0.0 ? vs : 0.0);
+    out->speed_sd_mps = (real)sqrt(vv > 0.0 ? vv : 0.0);
+    out->theta[0] = (real)th[0];
+    out->theta[1] = (real)th[1];
+    out->theta[2] = (real)th[2];
+    {
+        const hstpf_theta_t t = {NULL, th[0], th[1], th[2]};
+        out->resistance = (real)hstpf_resistance(&t, v);
+    }
+    out->standstill = f->standstill;
+    out->best = best;
+    out->declared = f->declared;
+    out->status = f->status;
+    out->decision_time_s = f->decision_time_s;
+    out->outliers = f->outliers;
+    out->reacquired = f->reacquired;
+    out->acquisitions = f->acquisitions;
+    out->nonfinite_resets = f->nonfinite_resets;
+    /* a gated last fix: the fixes and the estimate disagree beyond the
+     * gate (a reference jump, or a time base that stepped), so the estimate
+     * is not to be trusted until they agree again or it re-acquires */
+    out->valid = (uint8_t)(f->have_fix && f->outlier_run == 0u && f->lost_run == 0u && in_ranges(out));
+    return HSTPF_OK;
+}

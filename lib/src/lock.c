@@ -1,0 +1,145 @@
+/* Lock on the train: acquisition from the first fixes (or a speed prior),
+ * dropping and regaining it (an outage, a clock step, a run of gated
+ * fixes, a non-finite state), a model that lost the train placed again,
+ * and the origin that keeps float positions small (docs/model.md,
+ * "Acquisition and lock"). */
+#include <math.h>
+
+#include "bank.h"
+#include "engine.h"
+#include "refine.h"
+#include "track.h"
+
+#define REBASE_M 1024.0 /* re-centre the float positions past this distance */
+
+/* Lock from fixes: with a configured speed prior the first fix starts the
+ * filter; otherwise a fix waits for the next one (at most max_gap_s later,
+ * with a speed that is physically possible) and both place the models. The
+ * model weights and the declaration are kept. Returns 1 when locked now. */
+int hstpf__acquire(hstpf_t *f, double y, double xu)
+{
+    hstpf__acq_t q;
+    q.xu = xu;
+    q.v0 = f->cfg.init_speed_mps;
+    q.t12 = 0.0;
+    if (f->cfg.init_speed_sd <= 0.0) {
+        const double t = f->pend_age_s;
+        if (!f->have_pend || !(t > 0.0 && t <= f->cfg.max_gap_s) ||
+            fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
+            f->have_pend = 1;
+            f->pend_y = y;
+            f->pend_age_s = 0.0;
+            return 0;
+        }
+        q.t12 = t;
+    }
+    f->origin_m = floor(y);
+    hstpf__track_rebase(f);
+    q.y1 = f->pend_y - f->origin_m;
+    q.y2 = y - f->origin_m;
+    hstpf__engine_of(f)->place_all(f, &q);
+    if (f->rf.active) {
+        /* (s, v) as the rows' filters have them; theta from the prior the
+         * first time, kept from what was learnt afterwards */
+        const hstpf_model_t *m0 = &f->m[0];
+        if (!f->rf.placed) {
+            hstpf__refine_place(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
+            f->rf.placed = 1;
+        } else {
+            hstpf__refine_replace_sv(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
+        }
+    }
+    f->have_pend = 0;
+    f->have_fix = 1;
+    f->ever_locked = 1;
+    f->outlier_run = 0;
+    ++f->acquisitions;
+    return 1;
+}
+
+/* Drops the lock; the next fixes acquire again. keep_pend: the last fix
+ * (a gated one) belongs to the new time base and may pair with the next. */
+void hstpf__drop_lock(hstpf_t *f, int keep_pend)
+{
+    f->have_fix = 0;
+    f->have_pend = (uint8_t)(keep_pend && f->have_pend);
+    f->standstill = 0;
+    f->weights_wait = 0;
+    f->arrival_s = 0.0;
+    f->lost_run = 0;
+}
+
+/* Keep float positions small: shift the origin by whole metres. */
+void hstpf__rebase(hstpf_t *f)
+{
+    const double rel = hstpf__blended_position(f, 0.0);
+    real d;
+    if (fabs(rel) < REBASE_M) {
+        return;
+    }
+    d = (real)floor(rel);
+    hstpf__engine_of(f)->shift(f, d);
+    f->rf.kz[0] -= (double)d;
+    f->origin_m += (double)d;
+    hstpf__track_rebase(f);
+}
+
+/* A model whose every particle has been at the floor for
+ * model_reacquire_after measurements has lost the train (its dynamics are
+ * wrong, or the train changed): it is placed again at the fix, with the
+ * blended speed, so that it can recover if it becomes right. Its weight is
+ * kept. */
+void hstpf__models_reacquire(hstpf_t *f, real yr)
+{
+    const hstpf__engine_t *e = hstpf__engine_of(f);
+    double wb[HSTPF_MAX_MODELS + 1], vb = 0.0;
+    uint16_t l;
+    hstpf__blend_weights(f, wb);
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        vb += wb[l] * (double)f->m[l].v_mean;
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        if (m->floor_run >= f->cfg.model_reacquire_after) {
+            hstpf__acq_t q;
+            q.y1 = q.y2 = (double)yr;
+            q.t12 = 0.0;
+            q.xu = 0.0;
+            q.v0 = vb;
+            e->place_one(f, m, &q);
+            m->floor_run = 0;
+            ++m->reacquired;
+        }
+    }
+}
+
+int32_t hstpf_reacquire(hstpf_t *f)
+{
+    if (f == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    hstpf__drop_lock(f, 0);
+    return HSTPF_OK;
+}
+
+/* A filter that went non-finite starts again from the next fixes: uniform
+ * weights if those are lost too. Counted in nonfinite_resets. */
+void hstpf__nonfinite_reset(hstpf_t *f)
+{
+    uint16_t l;
+    const uint16_t nh = hstpf__n_hyp(f);
+    for (l = 0; l < nh; ++l) {
+        if (!hstpf__fin(*hstpf__logq_of(f, l))) {
+            for (l = 0; l < nh; ++l) {
+                *hstpf__logq_of(f, l) = -log((double)nh);
+            }
+            break;
+        }
+    }
+    f->rf.placed = 0; /* its theta too may be what went non-finite */
+    ++f->nonfinite_resets;
+    hstpf__drop_lock(f, 0);
+}
