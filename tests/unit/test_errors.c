@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "testconfig.h"
 #include "testutil.h"
 
 /* ~200 kB each: static, as on a target */
@@ -15,12 +16,8 @@ static hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS + 1];
 
 static void good_config(hstpf_config_t *c)
 {
-    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
-    models[0] = hstpf_train_types[hstpf_train_type_find("SS1/SS3/SS4")];
-    models[1] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    models[2] = hstpf_train_types[hstpf_train_type_find("SS8")];
-    c->models = models;
-    c->n_models = 3;
+    static const char *const names[3] = {"SS1/SS3/SS4", "CRH3", "SS8"};
+    tu_config_rows(c, models, names, 3);
     c->n_particles = 40;
     c->seed = 77;
     c->engine = HSTPF_ENGINE_PARTICLE; /* hstpf_particles() needs particles */
