@@ -10,7 +10,7 @@
  * below the measurement's own RMS error, 0.1 m: an estimate worse than the
  * raw measurement it is given has failed. */
 #include "hstpf_sim.h"
-#include "testconfig.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 static hstpf_t filt; /* static, as on a target */

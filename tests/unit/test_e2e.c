@@ -37,7 +37,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
-#include "testconfig.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #ifndef E2E_CASE

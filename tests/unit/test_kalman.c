@@ -25,7 +25,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
-#include "testconfig.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define XI (9.81 / 1.06 / 1000.0)
@@ -106,11 +106,7 @@ static void config(hstpf_config_t *c, hstpf_engine_t engine)
 
 static void step(double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
     assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
 }
 

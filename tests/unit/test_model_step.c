@@ -27,7 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "testconfig.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define NP 8
@@ -60,13 +60,8 @@ static void base_config(hstpf_config_t *c)
 
 static void step(hstpf_t *f, double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    int32_t err;
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
-    err = hstpf_step(f, &in);
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
+    const int32_t err = hstpf_step(f, &in);
     if (err != HSTPF_OK) {
         fail_msg("hstpf_step: %s", hstpf_strerror(err));
     }

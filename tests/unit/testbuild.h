@@ -1,6 +1,7 @@
-/* Configuration builders shared by the unit tests. */
-#ifndef HSTPF_TESTCONFIG_H
-#define HSTPF_TESTCONFIG_H
+/* Builders of what the unit tests hand the library: configurations over
+ * named Table 1 rows, step inputs. */
+#ifndef HSTPF_TESTBUILD_H
+#define HSTPF_TESTBUILD_H
 
 #include <stdint.h>
 
@@ -10,5 +11,8 @@
  * rows named in names[0..n-1], copied into models[0..n-1] (caller-owned; it
  * must outlive c). A name that is not in Table 1 fails the test. */
 void tu_config_rows(hstpf_config_t *c, hstpf_theta_t *models, const char *const *names, uint16_t n);
+
+/* One step's input: length dt s, traction u N/kN, position y m if has_y. */
+hstpf_input_t tu_input(double dt, double u, double y, int has_y);
 
 #endif

@@ -1,4 +1,6 @@
-#include "testconfig.h"
+#include "testbuild.h"
+
+#include <string.h>
 
 #include "testutil.h" /* cmocka */
 
@@ -13,4 +15,15 @@ void tu_config_rows(hstpf_config_t *c, hstpf_theta_t *models, const char *const 
     }
     c->models = models;
     c->n_models = n;
+}
+
+hstpf_input_t tu_input(double dt, double u, double y, int has_y)
+{
+    hstpf_input_t in;
+    memset(&in, 0, sizeof in);
+    in.dt_s = dt;
+    in.traction = u;
+    in.position_m = y;
+    in.has_position = (uint8_t)has_y;
+    return in;
 }
