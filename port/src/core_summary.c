@@ -8,6 +8,18 @@ static void kv(FILE *fp, const char *k, unsigned long v, int first)
     fprintf(fp, "%s\"%s\":%lu", first ? "" : ",", k, v);
 }
 
+/* The E2E receiver's counts of one input, as the members of an object. */
+static void e2e_kv(FILE *fp, const hstpf_e2e_counts_t *x)
+{
+    kv(fp, "ok", (unsigned long)x->ok, 1);
+    kv(fp, "lost", (unsigned long)x->lost, 0);
+    kv(fp, "bad_crc", (unsigned long)x->bad_crc, 0);
+    kv(fp, "wrong_length", (unsigned long)x->wrong_length, 0);
+    kv(fp, "repeated", (unsigned long)x->repeated, 0);
+    kv(fp, "counter_jump", (unsigned long)x->jump, 0);
+    kv(fp, "stale", (unsigned long)x->stale, 0);
+}
+
 void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_kind, const char *source,
                          const char *end)
 {
@@ -116,21 +128,9 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "clock_steps_back", (unsigned long)s->clock_back, 0);
     kv(fp, "bad_lines", (unsigned long)c->n.bad_lines, 0);
     fputs("},\"e2e\":{\"position\":{", fp);
-    kv(fp, "ok", (unsigned long)p->ok, 1);
-    kv(fp, "lost", (unsigned long)p->lost, 0);
-    kv(fp, "bad_crc", (unsigned long)p->bad_crc, 0);
-    kv(fp, "wrong_length", (unsigned long)p->wrong_length, 0);
-    kv(fp, "repeated", (unsigned long)p->repeated, 0);
-    kv(fp, "counter_jump", (unsigned long)p->jump, 0);
-    kv(fp, "stale", (unsigned long)p->stale, 0);
+    e2e_kv(fp, p);
     fputs("},\"traction\":{", fp);
-    kv(fp, "ok", (unsigned long)t->ok, 1);
-    kv(fp, "lost", (unsigned long)t->lost, 0);
-    kv(fp, "bad_crc", (unsigned long)t->bad_crc, 0);
-    kv(fp, "wrong_length", (unsigned long)t->wrong_length, 0);
-    kv(fp, "repeated", (unsigned long)t->repeated, 0);
-    kv(fp, "counter_jump", (unsigned long)t->jump, 0);
-    kv(fp, "stale", (unsigned long)t->stale, 0);
+    e2e_kv(fp, t);
     fputs("}},\"error_classes\":{", fp);
     for (i = 0; i < HSTPFD_ERR_N_CLASSES; ++i) {
         kv(fp, hstpfd__class_names[i], (unsigned long)c->n.err_class[i], i == 0);
