@@ -59,7 +59,7 @@ uint32_t hstpfd_input_id(unsigned i);
  * the estimator has a fix, its fault/saturation bit is 1. */
 typedef struct {
     uint8_t have_fix;         /* the estimator has had its first fix */
-    uint8_t valid;            /* the estimate is valid (core.c: est_valid) */
+    uint8_t valid;            /* the estimate is valid (core_tx.c: hstpfd__est_valid) */
     double position_m;
     double speed_mps;
     double position_sd_m, speed_sd_mps; /* blended posterior sd */

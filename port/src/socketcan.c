@@ -1,7 +1,7 @@
 /* hstpfd: SocketCAN I/O (Linux only). Opens the interface with kernel
  * filters for our input IDs, error frames enabled and kernel receive
  * timestamps, polls with timeouts, sends, and closes and reopens the
- * socket when the interface goes away. Everything else is in core.c. */
+ * socket when the interface goes away. Everything else is in core*.c. */
 #define _DEFAULT_SOURCE 1
 
 #include <errno.h>

@@ -1,4 +1,4 @@
-/* Fuzz target: the daemon's configuration parser (port/src/config.c) and
+/* Fuzz target: the daemon's configuration parser (port/src/config_*.c) and
  * the --print-config round trip. The input is config-file text applied
  * line by line (errors are fine and must leave a usable configuration);
  * what hstpfd_config_write() prints must read back, through

@@ -131,17 +131,24 @@ def _recover_process_noise(rows, theta=W_crh3):
     return s[1:] - s[:-1] - v[:-1], v[1:] - v_det
 
 
-def test_case1_noise_has_the_stated_variance(tmp_path):
-    """w_s ~ N(0, 0.02), w_v ~ N(0, 0.05), e ~ N(0, 5). Tolerance: 5 standard
-    errors of the sample mean (sd/sqrt n) and of the sample variance
-    (var sqrt(2/(n-1)), Gaussian)."""
-    log, truth = run_cli(tmp_path, "--noise", "case1", "--duration", "7200", "--frame-period", "0.2", "--seed", "11")
+def _recover_noise(log, truth):
+    """w_s, w_v of every step (from the truth) and e of every position frame
+    (the frame's position less the truth interpolated at its time)."""
     rows = read_truth(truth)
     ws, wv = _recover_process_noise(rows)
     t = np.array([float(r["time_s"]) for r in rows])
     s = np.array([float(r["position_m"]) for r in rows])
     frames = decode_log(log)["Position"]
     e = np.array([sig["Position"] for _, sig in frames]) - np.interp([tt for tt, _ in frames], t, s)
+    return ws, wv, e
+
+
+def test_case1_noise_has_the_stated_variance(tmp_path):
+    """w_s ~ N(0, 0.02), w_v ~ N(0, 0.05), e ~ N(0, 5). Tolerance: 5 standard
+    errors of the sample mean (sd/sqrt n) and of the sample variance
+    (var sqrt(2/(n-1)), Gaussian)."""
+    log, truth = run_cli(tmp_path, "--noise", "case1", "--duration", "7200", "--frame-period", "0.2", "--seed", "11")
+    ws, wv, e = _recover_noise(log, truth)
     for x, var in ((ws, 0.02), (wv, 0.05), (e, 5.0)):
         n = len(x)
         assert abs(x.mean()) < 5 * math.sqrt(var / n)
@@ -153,12 +160,7 @@ def test_case2_noise_is_gamma(tmp_path):
     """w_s ~ Gamma(0.02, 0.1), w_v ~ Gamma(0.1, 0.05), e ~ Gamma(0.5, 0.2):
     support >= 0; means within 5 standard errors (sd = sqrt(k) theta)."""
     log, truth = run_cli(tmp_path, "--noise", "case2", "--duration", "7200", "--frame-period", "0.2", "--seed", "5")
-    rows = read_truth(truth)
-    ws, wv = _recover_process_noise(rows)
-    t = np.array([float(r["time_s"]) for r in rows])
-    s = np.array([float(r["position_m"]) for r in rows])
-    frames = decode_log(log)["Position"]
-    e = np.array([sig["Position"] for _, sig in frames]) - np.interp([tt for tt, _ in frames], t, s)
+    ws, wv, e = _recover_noise(log, truth)
     for x, k, th, tol0 in ((ws, 0.02, 0.1, 2e-6), (wv, 0.1, 0.05, 2e-6), (e, 0.5, 0.2, 5.1e-3)):
         assert x.min() >= -tol0  # CSV (1e-6) and frame (1 cm) rounding only
         assert abs(x.mean() - k * th) < 5 * math.sqrt(k) * th / math.sqrt(len(x))

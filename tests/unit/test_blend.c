@@ -10,6 +10,7 @@
  * below the measurement's own RMS error, 0.1 m: an estimate worse than the
  * raw measurement it is given has failed. */
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 static hstpf_t filt; /* static, as on a target */
@@ -30,20 +31,15 @@ static void test_long_run_blend(void **state)
         double se_blend = 0.0, se_decl = 0.0, worst_lost = 0.0;
         long n = 0;
         int i;
-        for (i = 0; i < 3; ++i) {
-            models[i] = hstpf_train_types[hstpf_train_type_find(names[i])];
-        }
         hstpf_sim_default(&sc);
         sc.seed = seed;
         sc.noise_e.sd = 0.1;
         sc.noise_s.sd = 0.01;
         sc.noise_v.sd = 0.01;
-        assert_int_equal(hstpf_config_default(&cfg), HSTPF_OK);
+        tu_config_rows(&cfg, models, names, 3);
         cfg.noise_s = sc.noise_s;
         cfg.noise_v = sc.noise_v;
         cfg.noise_e = sc.noise_e;
-        cfg.models = models;
-        cfg.n_models = 3;
         cfg.seed = 1000u + seed;
         assert_int_equal(hstpf_init(&filt, sizeof filt, &cfg), HSTPF_OK);
         hstpf_sim_init(&sim, &sc);

@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #ifndef E2E_CASE
@@ -91,11 +92,6 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
 
     memset(res, 0, sizeof *res);
     res->decision_time_s = -1.0;
-    for (i = 0; i < 3; ++i) {
-        const int32_t k = hstpf_train_type_find(names[i]);
-        assert_true(k >= 0);
-        models[i] = hstpf_train_types[k];
-    }
     hstpf_sim_default(&sc); /* CRH3, paper profile, dt 1 s */
     sc.seed = sim_seed;
     if (E2E_CASE == 2) {
@@ -104,12 +100,10 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
         hstpf_sim_case1(&sc);
     }
     assert_string_equal(sc.truth.name, "CRH3");
-    assert_int_equal(hstpf_config_default(&cfg), HSTPF_OK);
+    tu_config_rows(&cfg, models, names, 3);
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
     cfg.noise_e = sc.noise_e;
-    cfg.models = models;
-    cfg.n_models = 3;
     cfg.seed = 1000u + sim_seed;
     cfg.engine = E2E_ENGINE;
     /* the Monte Carlo study's settings (docs/results.md), for every case;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "testbuild.h"
 #include "testutil.h"
 
 /* ~200 kB each: static, as on a target */
@@ -15,31 +16,16 @@ static hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS + 1];
 
 static void good_config(hstpf_config_t *c)
 {
-    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
-    models[0] = hstpf_train_types[hstpf_train_type_find("SS1/SS3/SS4")];
-    models[1] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    models[2] = hstpf_train_types[hstpf_train_type_find("SS8")];
-    c->models = models;
-    c->n_models = 3;
+    static const char *const names[3] = {"SS1/SS3/SS4", "CRH3", "SS8"};
+    tu_config_rows(c, models, names, 3);
     c->n_particles = 40;
     c->seed = 77;
     c->engine = HSTPF_ENGINE_PARTICLE; /* hstpf_particles() needs particles */
 }
 
-static hstpf_input_t input(double dt, double u, double y, int has_y)
-{
-    hstpf_input_t in;
-    memset(&in, 0, sizeof in);
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
-    return in;
-}
-
 static void good_step(hstpf_t *f, double y)
 {
-    const hstpf_input_t in = input(1.0, 10.0, y, 1);
+    const hstpf_input_t in = tu_input(1.0, 10.0, y, 1);
     int32_t err = hstpf_step(f, &in);
     if (err != HSTPF_OK) {
         fail_msg("good step failed: %s", hstpf_strerror(err));
@@ -287,7 +273,7 @@ static void test_step_errors(void **state)
     good_config(&good);
     make_twins(&good);
 
-    in = input(1.0, 0.0, y, 1);
+    in = tu_input(1.0, 0.0, y, 1);
     assert_int_equal(hstpf_step(NULL, &in), HSTPF_E_NULL);
     expect_step(NULL, HSTPF_E_NULL, "in NULL", y += 2.0);
     /* use before init: a zeroed or overwritten instance */
@@ -302,50 +288,50 @@ static void test_step_errors(void **state)
 
     for (i = 0; i < 3; ++i) {
         const double b = i == 0 ? nan : i == 1 ? inf : -inf;
-        in = input(b, 0.0, y, 1);
+        in = tu_input(b, 0.0, y, 1);
         expect_step(&in, HSTPF_E_NONFINITE, "dt non-finite", y += 2.0);
-        in = input(1.0, b, y, 1);
+        in = tu_input(1.0, b, y, 1);
         expect_step(&in, HSTPF_E_NONFINITE, "traction non-finite", y += 2.0);
-        in = input(1.0, 0.0, b, 1);
+        in = tu_input(1.0, 0.0, b, 1);
         expect_step(&in, HSTPF_E_NONFINITE, "position non-finite", y += 2.0);
-        in = input(b, 0.0, y, 0);
+        in = tu_input(b, 0.0, y, 0);
         expect_step(&in, HSTPF_E_NONFINITE, "dt non-finite, no position", y += 2.0);
     }
-    in = input(0.0, 0.0, y, 1);
+    in = tu_input(0.0, 0.0, y, 1);
     expect_step(&in, HSTPF_E_DT, "dt 0", y += 2.0);
-    in = input(-0.0, 0.0, y, 1);
+    in = tu_input(-0.0, 0.0, y, 1);
     expect_step(&in, HSTPF_E_DT, "dt -0", y += 2.0);
-    in = input(-1.0, 0.0, y, 1);
+    in = tu_input(-1.0, 0.0, y, 1);
     expect_step(&in, HSTPF_E_DT, "dt < 0", y += 2.0);
-    in = input(HSTPF_DT_MAX_S * (1.0 + 1e-12), 0.0, y, 1);
+    in = tu_input(HSTPF_DT_MAX_S * (1.0 + 1e-12), 0.0, y, 1);
     expect_step(&in, HSTPF_E_DT, "dt > max", y += 2.0);
-    in = input(1e300, 0.0, y, 0);
+    in = tu_input(1e300, 0.0, y, 0);
     expect_step(&in, HSTPF_E_DT, "dt 1e300", y += 2.0);
-    in = input(1.0, HSTPF_U_MAX + 1e-9, y, 1);
+    in = tu_input(1.0, HSTPF_U_MAX + 1e-9, y, 1);
     expect_step(&in, HSTPF_E_RANGE, "traction > max", y += 2.0);
-    in = input(1.0, -HSTPF_U_MAX - 1e-9, y, 1);
+    in = tu_input(1.0, -HSTPF_U_MAX - 1e-9, y, 1);
     expect_step(&in, HSTPF_E_RANGE, "braking > max", y += 2.0);
-    in = input(1.0, 0.0, HSTPF_POS_MAX_M * (1.0 + 1e-12), 1);
+    in = tu_input(1.0, 0.0, HSTPF_POS_MAX_M * (1.0 + 1e-12), 1);
     expect_step(&in, HSTPF_E_RANGE, "position > max", y += 2.0);
-    in = input(1.0, 0.0, -HSTPF_POS_MAX_M * (1.0 + 1e-12), 1);
+    in = tu_input(1.0, 0.0, -HSTPF_POS_MAX_M * (1.0 + 1e-12), 1);
     expect_step(&in, HSTPF_E_RANGE, "position < -max", y += 2.0);
     /* a NaN position without has_position is not read */
-    in = input(1.0, 0.0, nan, 0);
+    in = tu_input(1.0, 0.0, nan, 0);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
     assert_int_equal(hstpf_step(&f_b, &in), HSTPF_OK);
     assert_memory_equal(&f_a, &f_b, sizeof f_a);
     y += 2.0; /* the predicted step */
     /* limits that are accepted */
-    in = input(HSTPF_DT_MAX_S, HSTPF_U_MAX, y += 2.0, 0);
+    in = tu_input(HSTPF_DT_MAX_S, HSTPF_U_MAX, y += 2.0, 0);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
-    in = input(1e-9, -HSTPF_U_MAX, 0.0, 0);
+    in = tu_input(1e-9, -HSTPF_U_MAX, 0.0, 0);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
     /* the position limits on a fresh instance (first fix there) */
     assert_int_equal(hstpf_init(&f_zero, sizeof f_zero, &good), HSTPF_OK);
-    in = input(1.0, 0.0, HSTPF_POS_MAX_M, 1);
+    in = tu_input(1.0, 0.0, HSTPF_POS_MAX_M, 1);
     assert_int_equal(hstpf_step(&f_zero, &in), HSTPF_OK);
     assert_int_equal(hstpf_init(&f_zero, sizeof f_zero, &good), HSTPF_OK);
-    in = input(1.0, 0.0, -HSTPF_POS_MAX_M, 1);
+    in = tu_input(1.0, 0.0, -HSTPF_POS_MAX_M, 1);
     assert_int_equal(hstpf_step(&f_zero, &in), HSTPF_OK);
 }
 
@@ -358,9 +344,9 @@ static void test_step_errors_before_fix(void **state)
     good_config(&good);
     assert_int_equal(hstpf_init(&f_a, sizeof f_a, &good), HSTPF_OK);
     assert_int_equal(hstpf_init(&f_b, sizeof f_b, &good), HSTPF_OK);
-    in = input(NAN, 0.0, 10.0, 1);
+    in = tu_input(NAN, 0.0, 10.0, 1);
     expect_step(&in, HSTPF_E_NONFINITE, "before the fix: dt NaN", 10.0);
-    in = input(1.0, 0.0, 2e8, 1);
+    in = tu_input(1.0, 0.0, 2e8, 1);
     expect_step(&in, HSTPF_E_RANGE, "after the fix: position", 12.0);
 }
 
@@ -404,9 +390,9 @@ static void test_outlier_gate(void **state)
     good.reacquire_after = 3;
     make_twins(&good);
     for (k = 0; k < 3; ++k) {
-        in = input(1.0, 10.0, y + 5000.0, 1);
+        in = tu_input(1.0, 10.0, y + 5000.0, 1);
         assert_int_equal(hstpf_step(&f_a, &in), HSTPF_E_OUTLIER);
-        in = input(1.0, 10.0, 0.0, 0);
+        in = tu_input(1.0, 10.0, 0.0, 0);
         assert_int_equal(hstpf_step(&f_b, &in), HSTPF_OK);
         assert_same_estimate(&f_a, &f_b);
         assert_int_equal(hstpf_estimate(&f_a, &est), HSTPF_OK);
@@ -424,10 +410,10 @@ static void test_outlier_gate(void **state)
     /* three in a row are rejected, the fourth re-acquires from the last
      * two: position and speed of the new reference (30 m/s) */
     for (k = 0; k < 3; ++k) {
-        in = input(1.0, 10.0, 90000.0 + 30.0 * k, 1);
+        in = tu_input(1.0, 10.0, 90000.0 + 30.0 * k, 1);
         assert_int_equal(hstpf_step(&f_a, &in), HSTPF_E_OUTLIER);
     }
-    in = input(1.0, 10.0, 90090.0, 1);
+    in = tu_input(1.0, 10.0, 90090.0, 1);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
     assert_int_equal(hstpf_estimate(&f_a, &est), HSTPF_OK);
     assert_int_equal(est.reacquired, 1u);
@@ -441,19 +427,19 @@ static void test_outlier_gate(void **state)
     good.reacquire_after = 0;
     make_twins(&good);
     for (k = 0; k < 20; ++k) {
-        in = input(1.0, 10.0, 50000.0, 1);
+        in = tu_input(1.0, 10.0, 50000.0, 1);
         assert_int_equal(hstpf_step(&f_a, &in), HSTPF_E_OUTLIER);
     }
     /* gate_m = 0: no gate */
     good.gate_m = 0.0;
     make_twins(&good);
-    in = input(1.0, 10.0, 50000.0, 1);
+    in = tu_input(1.0, 10.0, 50000.0, 1);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
     /* a measurement just inside the gate (1000 m) is accepted */
     good.gate_m = 1000.0;
     make_twins(&good);
     assert_int_equal(hstpf_estimate(&f_a, &est), HSTPF_OK);
-    in = input(1.0, 10.0, est.position_m + est.speed_mps * 1.0 + 900.0, 1);
+    in = tu_input(1.0, 10.0, est.position_m + est.speed_mps * 1.0 + 900.0, 1);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
 }
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define XI (9.81 / 1.06 / 1000.0)
@@ -54,23 +55,15 @@ static double truth_fix(truth_t *t)
 
 static void config(hstpf_config_t *c, hstpf_engine_t engine)
 {
-    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
-    models[0] = hstpf_train_types[hstpf_train_type_find("SS1/SS3/SS4")];
-    models[1] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    models[2] = hstpf_train_types[hstpf_train_type_find("SS8")];
-    c->models = models;
-    c->n_models = 3;
+    static const char *const names[3] = {"SS1/SS3/SS4", "CRH3", "SS8"};
+    tu_config_rows(c, models, names, 3);
     c->engine = engine;
     c->seed = 5;
 }
 
 static void step(double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
     assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
 }
 

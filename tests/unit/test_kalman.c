@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define XI (9.81 / 1.06 / 1000.0)
@@ -91,12 +92,9 @@ static double ekf_update(ekf_t *k, double y, double r)
 
 static void config(hstpf_config_t *c, hstpf_engine_t engine)
 {
-    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
+    static const char *const names[2] = {"CRH3", "SS8"};
+    tu_config_rows(c, models, names, 2);
     c->refine = 0; /* the rows' weights against the textbook EKF's */
-    models[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    models[1] = hstpf_train_types[hstpf_train_type_find("SS8")];
-    c->models = models;
-    c->n_models = 2;
     c->engine = engine;
     c->noise_s.sd = 0.5;
     c->noise_v.sd = 0.2;
@@ -108,11 +106,7 @@ static void config(hstpf_config_t *c, hstpf_engine_t engine)
 
 static void step(double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
     assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
 }
 

@@ -27,6 +27,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "testbuild.h"
 #include "testutil.h"
 
 #define NP 8
@@ -41,11 +42,8 @@ static hstpf_theta_t models[2];
 
 static void base_config(hstpf_config_t *c)
 {
-    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
-    models[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    models[1] = hstpf_train_types[hstpf_train_type_find("SS8")];
-    c->models = models;
-    c->n_models = 2;
+    static const char *const names[2] = {"CRH3", "SS8"};
+    tu_config_rows(c, models, names, 2);
     c->n_particles = NP;
     c->seed = 12345;
     c->engine = HSTPF_ENGINE_PARTICLE; /* this file checks the particle step */
@@ -62,13 +60,8 @@ static void base_config(hstpf_config_t *c)
 
 static void step(hstpf_t *f, double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    int32_t err;
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
-    err = hstpf_step(f, &in);
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
+    const int32_t err = hstpf_step(f, &in);
     if (err != HSTPF_OK) {
         fail_msg("hstpf_step: %s", hstpf_strerror(err));
     }

@@ -22,6 +22,7 @@ import signal
 import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any, Callable, Optional
 
 from . import __version__
@@ -372,3 +373,16 @@ def load_log(path: str):
         return read_log(path)
     except Exception as exc:  # python-can's readers raise many kinds on bad text
         raise input_error(path, exc) from exc
+
+
+def save_log(path: str, msgs, channel: str) -> int:
+    """write_log(path, msgs, channel) into a folder made if missing ('-':
+    stdout), with its failure as CliError(6). Returns the frame count."""
+    from .logio import write_log
+
+    try:
+        if path != "-":
+            Path(path).parent.mkdir(parents=True, exist_ok=True)
+        return write_log(path, msgs, channel)
+    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
+        raise output_error(path, exc) from exc

@@ -4,11 +4,10 @@ import csv
 import io
 import math
 import sys
-from pathlib import Path
 
 from . import cli, model
 from .frames import FrameCodec
-from .logio import input_frames, write_log
+from .logio import input_frames
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -86,12 +85,7 @@ def _main(argv) -> int:
     except Exception as exc:  # missing or unreadable DBC
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
     msgs = input_frames(codec, a.t0, times, pos, force, a.channel, pv, tv, fix, not a.no_fix_time)
-    try:
-        if a.out != "-":
-            Path(a.out).parent.mkdir(parents=True, exist_ok=True)
-        n = write_log(a.out, msgs, a.channel)
-    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
-        raise cli.output_error(a.out, exc) from exc
+    n = cli.save_log(a.out, msgs, a.channel)
     cli.emit_report({"log": a.out, "rows": len(rows), "frames": n}, a.json, stdout_taken=a.out == "-")
     return cli.EXIT_OK
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import cli, model
 from .frames import FrameCodec, TABLE1
-from .logio import input_frames, write_log
+from .logio import input_frames
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -107,12 +107,7 @@ def _main(argv) -> int:
     run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma)
     tf, y, u = model.sample_frames(run, a.frame_period, e, rng_meas, a.traction_noise_sd)
     msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel, fix_time=not a.no_fix_time)
-    try:
-        if a.out != "-":
-            Path(a.out).parent.mkdir(parents=True, exist_ok=True)
-        n = write_log(a.out, msgs, a.channel)
-    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
-        raise cli.output_error(a.out, exc) from exc
+    n = cli.save_log(a.out, msgs, a.channel)
     truth = a.truth or str(Path(a.out).with_name(Path(a.out).stem + "_truth.csv"))
     noise = a.noise + "".join(f" {k}={v}" for k, v in (("ws", a.ws), ("wv", a.wv), ("e", a.e_noise)) if v)
     write_truth(truth, run, a.mass_t, (a.seed, noise, a.profile))

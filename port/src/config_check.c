@@ -1,0 +1,27 @@
+/* hstpfd: the configuration's final cross-checks (hstpfd_config_finish). */
+#include "config_internal.h"
+
+int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size)
+{
+    hstpf_config_t fc;
+    hstpfd_sched_t s;
+    int32_t rc;
+    static hstpf_t probe; /* about 100 kB: not on the stack */
+    if ((c->iface[0] != '\0') == (c->log[0] != '\0')) {
+        hstpfd__fail(err, err_size, "give exactly one source: --iface IFACE or --log FILE");
+        return -1;
+    }
+    c->sched.mass_t = c->mass_t;
+    c->sched.first_dt_s = c->dt_nominal_s;
+    if (hstpfd_sched_init(&s, &c->sched, NULL, NULL) != 0) {
+        hstpfd__fail(err, err_size, "scheduling values out of range");
+        return -1;
+    }
+    hstpfd_config_filter(c, &fc);
+    rc = hstpf_init(&probe, sizeof probe, &fc);
+    if (rc != HSTPF_OK) {
+        hstpfd__fail(err, err_size, "the estimator rejects the configuration: %s (%ld)", hstpf_strerror(rc), (long)rc);
+        return -1;
+    }
+    return 0;
+}
