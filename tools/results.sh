@@ -34,6 +34,12 @@ for s in off10 off15 off20 grade8; do
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
 done
+echo "== the continuous hypothesis's prior weight: on-table speed against off-table safety"
+for q in 0.003 0.001; do
+  for s in paper1 off15 grade8; do
+    "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tail -2 | tee "$out/$s-prior$q.txt"
+  done
+done
 echo "== on-table figures without the continuous hypothesis"
 for s in paper1 all17 stops; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"

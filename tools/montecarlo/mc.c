@@ -738,7 +738,7 @@ static void usage(void)
             "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
-            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine]\n"
+            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine] [--refine-prior Q]\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -791,6 +791,8 @@ int main(int argc, char **argv)
             scen = v;
         } else if (!strcmp(a, "--seeds")) {
             seeds = atoi(v);
+        } else if (!strcmp(a, "--refine-prior")) {
+            st.base.refine_prior_q = atof(v);
         } else if (!strcmp(a, "--threads")) {
             threads = atoi(v);
         } else if (!strcmp(a, "--duration")) {
