@@ -58,8 +58,27 @@ static int in_ranges(const hstpf_estimate_t *o)
            o->theta[2] >= (real)0;
 }
 
-/* The published theta and its covariance: the mixture of the rows (points)
- * and the continuous hypothesis (Gaussian); a declared row is a point. */
+/* A row's spread for the band: its likelihood is computed at the nominal
+ * coefficients, but a real train of that type is spread around them (load,
+ * wear: refine_spread, docs/model.md) by more than the data can resolve
+ * (Cramer-Rao, docs/results.md). Only with the continuous hypothesis on:
+ * without it the rows are the paper's points. */
+static void row_spread(const hstpf_t *f, uint16_t l, double w, double *cov)
+{
+    const double rho = f->cfg.refine_spread;
+    const double c[3] = {f->theta[l].c0, f->theta[l].c1, f->theta[l].c2};
+    int i;
+    if (!f->rf.active) {
+        return;
+    }
+    for (i = 0; i < 3; ++i) {
+        cov[4 * i] += w * rho * rho * c[i] * c[i];
+    }
+}
+
+/* The published theta and its covariance: the mixture of the rows (their
+ * spread, row_spread()) and the continuous hypothesis (Gaussian); a
+ * declared row's theta is its own, with its spread. */
 static void theta_mixture(const hstpf_t *f, const double *wb, double *th, double *cov)
 {
     const uint16_t n = f->cfg.n_models;
@@ -73,6 +92,7 @@ static void theta_mixture(const hstpf_t *f, const double *wb, double *th, double
         th[0] = f->theta[f->declared].c0;
         th[1] = f->theta[f->declared].c1;
         th[2] = f->theta[f->declared].c2;
+        row_spread(f, (uint16_t)f->declared, 1.0, cov);
         return;
     }
     if (f->rf.active) {
@@ -97,6 +117,9 @@ static void theta_mixture(const hstpf_t *f, const double *wb, double *th, double
             for (j = 0; j < 3; ++j) {
                 cov[3 * i + j] += wb[l] * (d[i] * d[j] + (l < n ? 0.0 : rcov[3 * i + j]));
             }
+        }
+        if (l < n) {
+            row_spread(f, l, wb[l], cov);
         }
     }
 }

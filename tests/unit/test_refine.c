@@ -98,6 +98,39 @@ static void test_on_table(void **state)
     }
 }
 
+/* A declared row publishes its own theta with its spread (refine_spread,
+ * load and wear): theta_cov = diag((rho c_i)^2), so the band at V km/h is
+ * 1.96 rho sqrt(c0^2 + (c1 V)^2 + (c2 V^2)^2), by hand. Without the
+ * continuous hypothesis the declared row is the paper's point (cov 0). */
+static void test_declared_band(void **state)
+{
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH1")];
+    hstpf_estimate_t e;
+    int nofit, j;
+    double rho;
+    hstpf_config_t c;
+    (void)state;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    rho = c.refine_spread;
+    run_line(&truth, NULL, 0, 4, &e, &nofit);
+    assert_true(e.declared >= 0); /* CRH1 is told apart on this line */
+    {
+        const hstpf_theta_t *d = &hstpf_train_types[e.declared];
+        TU_CLOSE(e.theta_cov[0], rho * rho * d->c0 * d->c0, 1e-5 * d->c0 * d->c0);
+        TU_CLOSE(e.theta_cov[3], rho * rho * d->c1 * d->c1, 1e-5 * d->c1 * d->c1);
+        TU_CLOSE(e.theta_cov[5], rho * rho * d->c2 * d->c2, 1e-5 * d->c2 * d->c2);
+        assert_true(e.theta_cov[1] == 0.0f && e.theta_cov[2] == 0.0f && e.theta_cov[4] == 0.0f);
+        for (j = 0; j <= 7; ++j) {
+            const double vk = 50.0 * j, v = vk / 3.6;
+            const double sd_hand = rho * sqrt(d->c0 * d->c0 + d->c1 * vk * d->c1 * vk +
+                                              d->c2 * vk * vk * d->c2 * vk * vk);
+            double w, sd;
+            assert_int_equal(hstpf_resistance_band(&e, v, &w, &sd), HSTPF_OK);
+            TU_CLOSE(sd, sd_hand, 1e-4 * sd_hand);
+        }
+    }
+}
+
 /* An unmodelled 20 per-mille climb adds 20 N/kN to every row's W: no row
  * fits, the continuous hypothesis takes the weight, no type is declared, and
  * the refined theta carries the offset (W(0) well above every row's c0). */
@@ -151,7 +184,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_band_by_hand),
-        cmocka_unit_test(test_on_table),
+        cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
         cmocka_unit_test(test_gradient_no_fit),
         cmocka_unit_test(test_off),
     };

@@ -661,11 +661,11 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                 fprintf(jf,
                         "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
                         "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
-                        "\"w_rms\":%.5g,\"tv\":[",
+                        "\"w_rms\":%.5g,\"band_covers\":%d,\"nofit_end\":%d,\"q_true_end\":%.4g,\"tv\":[",
                         i ? "," : "", i + 1, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
                         q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
-                        r->w_rms);
+                        r->w_rms, r->band_covers, r->nofit_end, r->q_true_end);
                 for (k = 0; k < q->n_stops; ++k) {
                     fprintf(jf, "%s%.4g", k ? "," : "", q->tv[k]);
                 }
