@@ -29,7 +29,7 @@ for s in stops day start300 clock+30 clock-30 outage gain5; do
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"
-for s in off10 off15 off20 grade8; do
+for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
