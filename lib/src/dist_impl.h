@@ -10,6 +10,14 @@
 #define HSTPF__EXP_N 512
 
 #define HSTPF__LOG_N 256
+#define HSTPF__DIST_FLOOR_DEPTH 30.0 /* nats below the peak, unless the spec says */
+#define HSTPF__GAMMA_TOP_TAIL 1e-9   /* the Gamma's log-density grid ends at this tail */
+
+/* dist.c, for dist_blur.c (init time, double): the quantile of a spec
+ * (upper: from the right tail), and the range checks of a spread. */
+double hstpf__dist_quantile(const hstpf_dist_spec_t *sp, double mass, double prob, int upper);
+int hstpf__dist_finite(double x);
+int hstpf__dist_spread_ok(double spread, double offset);
 /* 2^(-j/512), j = 0..512 */
 extern const hstpf_real_t hstpf__exp2_tab[HSTPF__EXP_N + 1];
 /* log2(1 + j/256), j = 0..256 */

@@ -14,7 +14,8 @@
  * validity), engine.h (the interface every engine implements),
  * engine_kalman.c, engine_grid.c, engine_particle.c, refine.c (the
  * continuous-theta hypothesis), config.c (defaults and the one table of
- * ranges), track.c (gradient and curve profile), dist.c, rng.c.
+ * ranges), track.c (gradient and curve profile), dist.c (noise tables;
+ * dist_blur.c the measurement blur, dist_tables.c constants), rng.c.
  *
  * Model, per step of length T seconds (units: docs/model.md):
  *   s' = s + T v + w_s
