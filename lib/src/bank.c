@@ -172,8 +172,8 @@ static int acquire(hstpf_t *f, double y, double xu)
     q.v0 = f->cfg.init_speed_mps;
     q.t12 = 0.0;
     if (f->cfg.init_speed_sd <= 0.0) {
-        const double t = f->pend_age_s;
-        if (!f->have_pend || !(t > 0.0 && t <= f->cfg.max_gap_s) ||
+        const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
+        if (!f->have_pend || !(t <= f->cfg.max_gap_s) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
             f->have_pend = 1;
             f->pend_y = y;
@@ -211,7 +211,9 @@ static int acquire(hstpf_t *f, double y, double xu)
 static void drop_lock(hstpf_t *f, int keep_pend)
 {
     f->have_fix = 0;
-    f->have_pend = (uint8_t)(keep_pend && f->have_pend);
+    if (!keep_pend) {
+        f->have_pend = 0;
+    }
     f->standstill = 0;
     f->lost_run = 0;
 }
@@ -285,7 +287,7 @@ static uint8_t off_what(const hstpf_t *f)
     if (fabs(r->kz[5] - 1.0) > 3.0 * sqrt(r->kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ - 1])) {
         bits |= HSTPF_OFF_GAIN;
     }
-    if (dall > 0.0 && d0 < 0.25 * dall) {
+    if (d0 < 0.25 * dall) { /* dall = 0 makes d0 = 0: COEF */
         bits |= HSTPF_OFF_C0;
     } else {
         bits |= HSTPF_OFF_COEF;
@@ -443,26 +445,22 @@ int32_t hstpf_reacquire(hstpf_t *f)
     return HSTPF_OK;
 }
 
+/* Every state, variance and log weight finite. x * 0 is 0 for a finite x
+ * and NaN for a NaN or an infinity, so one sum tells (no overflow). */
 static int finite_models(const hstpf_t *f)
 {
+    double z = 0.0;
     uint16_t l;
+    int i;
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        if (!fin((double)m->s_mean) || !fin((double)m->v_mean) || !fin((double)m->s_var) ||
-            !fin((double)m->v_var) || !fin(m->logq)) {
-            return 0;
-        }
+        z += (double)m->s_mean * 0.0 + (double)m->v_mean * 0.0 + (double)m->s_var * 0.0 +
+             (double)m->v_var * 0.0 + m->logq * 0.0;
     }
-    if (f->rf.active) {
-        int i;
-        for (i = 0; i < HSTPF_REFINE_NZ; ++i) {
-            if (!fin(f->rf.kz[i]) || !fin(f->rf.kp[i * (HSTPF_REFINE_NZ + 1)])) {
-                return 0;
-            }
-        }
-        return fin(f->rf.logq);
+    for (i = 0; i < HSTPF_REFINE_NZ; ++i) { /* zero while the hypothesis is off */
+        z += f->rf.kz[i] * 0.0 + f->rf.kp[i * (HSTPF_REFINE_NZ + 1)] * 0.0;
     }
-    return 1;
+    return z + f->rf.logq * 0.0 == 0.0;
 }
 
 /* A filter that went non-finite starts again from the next fixes: uniform
@@ -636,9 +634,9 @@ static int in_ranges(const hstpf_estimate_t *o)
             return 0;
         }
     }
+    /* (the sds are square roots of values clamped at 0: never negative) */
     return fabs(o->position_m) <= HSTPF_POS_MAX_M && o->speed_mps >= (real)0 &&
-           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->position_sd_m >= 0.0 &&
-           o->speed_sd_mps >= (real)0 && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
+           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
            o->theta[2] >= (real)0;
 }
 
