@@ -407,6 +407,170 @@ static void test_lost_model_redrawn(void **state)
     }
 }
 
+/* ---- the grid engine at its narrow edges ------------------------------------ */
+
+/* Noise of a millimetre on every channel and exact fixes: the boxes are
+ * narrower than the grid's narrowest cells (1 mm x 48, 0.1 mm/s x 48) and
+ * are widened to them; the estimate is the truth to within a few cells. */
+static void test_grid_tiny_noise(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    c.noise_s.sd = 1e-3;
+    c.noise_v.sd = 1e-3;
+    c.noise_e.sd = 1e-3;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 30; ++k) {
+        assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE * k, 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0 + V_TRUE * 30.0, 0.05);
+    assert_float_equal((double)e.speed_mps, V_TRUE, 0.01);
+    assert_true((double)e.model[0].q > 0.99); /* SS8 cannot hold 50 m/s on CRH3's traction */
+}
+
+/* A slow train (2 m/s), fixes to 5 cm, and a row that stops it within
+ * seconds (c0 at its top, 50 N/kN): that row loses the fixes and is
+ * redrawn at the fix with the blended speed, its speed box then reaching
+ * down to rest. */
+static void test_grid_slow_redraw(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    rows[1] = rows[0];
+    rows[1].name = "stopper";
+    rows[1].c0 = 50.0;
+    c.noise_s.sd = 0.01;
+    c.noise_v.sd = 0.01;
+    c.noise_e.sd = 0.05;
+    c.model_reacquire_after = 2;
+    c.q_floor = 1e-6;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 120; ++k) {
+        const double u = hstpf_resistance(&rows[0], 2.0);
+        assert_int_equal(step(1.0, u, Y0 + 2.0 * k, 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.model[1].reacquired > 0);
+    assert_int_equal(e.model[0].reacquired, 0);
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0 + 240.0, 0.5);
+    assert_float_equal((double)e.speed_mps, 2.0, 0.1);
+}
+
+/* A standing train whose brakes hold against 40 N/kN (a row with c0 = 50:
+ * at rest only c0 acts) and a row with no resistance, which that traction
+ * sets rolling at 0.37 m/s^2: it leaves the fixes, is redrawn at them with
+ * the blended speed, 0, so its speed box starts at rest. The estimate stays
+ * at the standing train. */
+static void test_grid_standing_redraw(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    rows[0].name = "held";
+    rows[0].c0 = 50.0;
+    rows[1].name = "free";
+    rows[1].c0 = rows[1].c1 = rows[1].c2 = 0.0;
+    c.noise_s.sd = 0.01; /* 0.37 m/s^2 is then 37 sd of speed noise a step */
+    c.noise_v.sd = 0.01;
+    c.noise_e.sd = 0.05;
+    c.model_reacquire_after = 2;
+    c.q_floor = 1e-6;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 180; ++k) {
+        assert_int_equal(step(1.0, 40.0, Y0 + 0.02 * sin(1.7 * k), 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.model[1].reacquired > 0);
+    assert_int_equal(e.model[0].reacquired, 0);
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0, 0.1);
+    assert_true((double)e.speed_mps < 0.05);
+}
+
+/* ---- the validity invariant under injected faults ------------------------- */
+
+/* States that no input produces (the engines clamp speeds at 0, theta is a
+ * mixture of non-negative rows): injected into a locked instance, each
+ * must read valid = 0 (hstpf.h: "every published value finite and within
+ * the ranges"); the untouched instance reads valid = 1. */
+static void test_validity_injected(void **state)
+{
+    static hstpf_t good;
+    hstpf_config_t c;
+    int i;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    (void)run_fixes(0.0, 10);
+    good = f;
+    assert_true(est().valid);
+    for (i = 0; i < 4; ++i) {
+        f = good;
+        switch (i) {
+        case 0: f.m[0].s_mean = (hstpf_real_t)NAN; break;
+        case 1: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)-1; break; /* reversing */
+        case 2: f.theta[0].c0 = f.theta[1].c0 = -1.0; break;
+        default: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)(HSTPF_SPEED_MAX + 10.0); break;
+        }
+        if (est().valid) {
+            fail_msg("fault %d published as valid", i);
+        }
+    }
+    f = good;
+    assert_true(est().valid);
+}
+
+/* A filter whose weights went non-finite starts again with uniform
+ * weights; one whose state went non-finite on a step whose fix was gated
+ * still answers HSTPF_E_OUTLIER (the step was taken) and counts the reset. */
+static void test_nonfinite_paths(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    (void)run_fixes(0.0, 30);
+    e = est();
+    assert_true(fabs((double)e.model[0].q - 0.5) > 0.01); /* the data moved the weights */
+    f.m[1].logq = NAN;
+    assert_int_equal(step(1.0, u_hold(), fix_at(31.0), 1), HSTPF_OK);
+    e = est();
+    assert_int_equal(e.nonfinite_resets, 1);
+    assert_false(e.valid);
+    /* uniform over the three hypotheses: two rows and the continuous one */
+    assert_float_equal((double)e.model[0].q, 1.0 / 3.0, 1e-6);
+    assert_float_equal((double)e.model[1].q, 1.0 / 3.0, 1e-6);
+    assert_float_equal((double)e.q_offtable, 1.0 / 3.0, 1e-6);
+    (void)run_fixes(31.0, 5); /* re-acquired from the next fixes */
+    e = est();
+    assert_true(e.valid);
+    assert_int_equal(e.acquisitions, 2);
+    assert_float_equal(e.position_m, fix_at(36.0), 10.0);
+
+    f.m[0].kx[1] = NAN; /* the state; the gate still sees the published means */
+    assert_int_equal(step(1.0, u_hold(), fix_at(37.0) + 5000.0, 1), HSTPF_E_OUTLIER);
+    e = est();
+    assert_int_equal(e.outliers, 1);
+    assert_int_equal(e.nonfinite_resets, 2);
+    assert_false(e.valid);
+    (void)run_fixes(37.0, 5);
+    e = est();
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, fix_at(42.0), 10.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -420,6 +584,11 @@ int main(void)
         cmocka_unit_test(test_pending_fix_expires),
         cmocka_unit_test(test_beyond_ranges_invalid),
         cmocka_unit_test(test_lost_model_redrawn),
+        cmocka_unit_test(test_grid_tiny_noise),
+        cmocka_unit_test(test_grid_slow_redraw),
+        cmocka_unit_test(test_grid_standing_redraw),
+        cmocka_unit_test(test_validity_injected),
+        cmocka_unit_test(test_nonfinite_paths),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
