@@ -498,6 +498,37 @@ static void test_grid_standing_redraw(void **state)
     assert_true((double)e.speed_mps < 0.05);
 }
 
+/* ---- a table density whose variance cancels ---------------------------------- */
+
+/* All the mass of a TABLE density in a 3.3 um sliver at the end of a 1 km
+ * support: its variance (about 1e-12 m^2) is lost to round-off in the
+ * moments taken from the table's start (hstpf_dist_init clamps it at 0
+ * rather than take the root of a negative number). The tables stay usable:
+ * finite, every sample in the sliver (to float resolution at 1000 m, 6e-5),
+ * the density there far above the empty part. */
+static void test_table_sliver(void **state)
+{
+    static hstpf_dist_t d;
+    static const double x[3] = {0.0, 1000.0, 1000.0 + 3.3e-6}, p[3] = {0.0, 0.0, 1.0};
+    hstpf_dist_spec_t sp;
+    uint32_t r;
+    (void)state;
+    memset(&sp, 0, sizeof sp);
+    sp.kind = HSTPF_DIST_TABLE;
+    sp.table_x = x;
+    sp.table_p = p;
+    sp.table_n = 3;
+    assert_int_equal(hstpf_dist_init(&d, &sp), HSTPF_OK);
+    assert_true(isfinite((double)d.sd) && d.sd >= 0 && (double)d.sd < 1e-3);
+    assert_float_equal((double)d.mean, 1000.0, 1e-3);
+    for (r = 0; r < 64; ++r) {
+        const double v = (double)hstpf_dist_sample(&d, r * 67108864u + 12345u);
+        assert_float_equal(v, 1000.0, 2e-4);
+    }
+    assert_true(isfinite((double)hstpf_dist_logpdf(&d, (hstpf_real_t)1000.0)));
+    assert_true(hstpf_dist_logpdf(&d, (hstpf_real_t)1000.0) > hstpf_dist_logpdf(&d, (hstpf_real_t)500.0) + 10);
+}
+
 /* ---- the validity invariant under injected faults ------------------------- */
 
 /* States that no input produces (the engines clamp speeds at 0, theta is a
@@ -515,12 +546,14 @@ static void test_validity_injected(void **state)
     (void)run_fixes(0.0, 10);
     good = f;
     assert_true(est().valid);
-    for (i = 0; i < 4; ++i) {
+    for (i = 0; i < 6; ++i) {
         f = good;
         switch (i) {
         case 0: f.m[0].s_mean = (hstpf_real_t)NAN; break;
         case 1: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)-1; break; /* reversing */
         case 2: f.theta[0].c0 = f.theta[1].c0 = -1.0; break;
+        case 3: f.theta[0].c1 = f.theta[1].c1 = -0.1; break;
+        case 4: f.theta[0].c2 = f.theta[1].c2 = -0.001; break;
         default: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)(HSTPF_SPEED_MAX + 10.0); break;
         }
         if (est().valid) {
@@ -587,6 +620,7 @@ int main(void)
         cmocka_unit_test(test_grid_tiny_noise),
         cmocka_unit_test(test_grid_slow_redraw),
         cmocka_unit_test(test_grid_standing_redraw),
+        cmocka_unit_test(test_table_sliver),
         cmocka_unit_test(test_validity_injected),
         cmocka_unit_test(test_nonfinite_paths),
     };
