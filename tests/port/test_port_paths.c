@@ -137,7 +137,7 @@ static void test_options_reach_config(void **state)
  * same summary line to a file. */
 static void test_stream_to_stdout(void **state)
 {
-    char summary[4096];
+    static char summary[sizeof text];
     const char *p, *last;
     int lines = 0;
     (void)state;
