@@ -218,6 +218,24 @@ static void test_log_long_line(void **state)
     assert_non_null(strstr(slurp(DIR "/paths.out"), "\"bad_lines\":0"));
 }
 
+/* A model name holding a quote, a backslash and a tab reaches the outputs
+ * escaped: JSON \" \\ \u0009, CSV a doubled quote inside quotes. */
+static void test_names_escaped(void **state)
+{
+    const char *p;
+    (void)state;
+    assert_int_equal(run("-l " LOG " --models 'CRH3, q\"t\\x\ty:0.8:0.006:0.0001' --particles 20"), 0);
+    p = slurp(DIR "/paths.out");
+    if (strstr(p, "\"q\\\"t\\\\x\\u0009y\":") == NULL) {
+        fail_msg("escaped name not in the summary: %s", p);
+    }
+    assert_int_equal(run("-l " LOG " --models 'CRH3, q\"t\\x\ty:0.8:0.006:0.0001' --particles 20 --out-format csv -o "
+                         DIR "/esc.csv"),
+                     0);
+    p = slurp(DIR "/esc.csv");
+    assert_non_null(strstr(p, ",\"q_q\"\"t\\x\ty\","));
+}
+
 static void test_error_names(void **state)
 {
     (void)state;
@@ -314,7 +332,8 @@ int main(void)
         cmocka_unit_test(test_version_and_types),   cmocka_unit_test(test_bad_command_lines),
         cmocka_unit_test(test_options_reach_config), cmocka_unit_test(test_stream_to_stdout),
         cmocka_unit_test(test_outputs_not_writable), cmocka_unit_test(test_log_read_error),
-        cmocka_unit_test(test_log_long_line),        cmocka_unit_test(test_error_names),
+        cmocka_unit_test(test_log_long_line),        cmocka_unit_test(test_names_escaped),
+        cmocka_unit_test(test_error_names),
         cmocka_unit_test(test_core_init_refusals),   cmocka_unit_test(test_config_write_sizes),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
