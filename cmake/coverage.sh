@@ -11,12 +11,12 @@ cd "$root"
 build=$1
 md=${2:-}
 
-# Floors, percent of branches taken (gcovr's rounded figure), at the
-# lowest values measured (timing-dependent daemon paths vary by a few
-# branches between runs). The goals are lib/ 95, port/src/ 85;
-# docs/quality.md lists the gap per file. Raising one is a one-line change.
-LIB_FLOOR=90
-PORT_FLOOR=81
+# Floors, percent of branches taken (gcovr's figure, rounded down): the
+# goals of issue 11. Measured 95.6 % and 88.0 % (docs/quality.md, per
+# file); the daemon's timing-dependent paths vary by a few branches between
+# runs, and a VM test that stops early counts 19 fewer in socketcan.c.
+LIB_FLOOR=95
+PORT_FLOOR=85
 
 command -v gcovr >/dev/null || { echo "coverage: gcovr not installed (tools/setup.sh installs it)" >&2; exit 2; }
 

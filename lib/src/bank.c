@@ -178,26 +178,22 @@ static void update_model_weights(hstpf_t *f)
     }
 }
 
+/* Every state, variance and log weight finite. x * 0 is 0 for a finite x
+ * and NaN for a NaN or an infinity, so one sum tells (no overflow). */
 static int finite_models(const hstpf_t *f)
 {
+    double z = 0.0;
     uint16_t l;
+    int i;
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        if (!hstpf__fin((double)m->s_mean) || !hstpf__fin((double)m->v_mean) || !hstpf__fin((double)m->s_var) ||
-            !hstpf__fin((double)m->v_var) || !hstpf__fin(m->logq)) {
-            return 0;
-        }
+        z += (double)m->s_mean * 0.0 + (double)m->v_mean * 0.0 + (double)m->s_var * 0.0 +
+             (double)m->v_var * 0.0 + m->logq * 0.0;
     }
-    if (f->rf.active) {
-        int i;
-        for (i = 0; i < HSTPF_REFINE_NZ; ++i) {
-            if (!hstpf__fin(f->rf.kz[i]) || !hstpf__fin(f->rf.kp[i * (HSTPF_REFINE_NZ + 1)])) {
-                return 0;
-            }
-        }
-        return hstpf__fin(f->rf.logq);
+    for (i = 0; i < HSTPF_REFINE_NZ; ++i) { /* zero while the hypothesis is off */
+        z += f->rf.kz[i] * 0.0 + f->rf.kp[i * (HSTPF_REFINE_NZ + 1)] * 0.0;
     }
-    return 1;
+    return z + f->rf.logq * 0.0 == 0.0;
 }
 
 /* Standstill: every model that carries weight is held at rest. The data

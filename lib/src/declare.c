@@ -40,7 +40,7 @@ uint8_t hstpf__off_what(const hstpf_t *f)
     if (fabs(r->kz[5] - 1.0) > 3.0 * sqrt(r->kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ - 1])) {
         bits |= HSTPF_OFF_GAIN;
     }
-    if (dall > 0.0 && d0 < 0.25 * dall) {
+    if (d0 < 0.25 * dall) { /* dall = 0 makes d0 = 0: COEF */
         bits |= HSTPF_OFF_C0;
     } else {
         bits |= HSTPF_OFF_COEF;

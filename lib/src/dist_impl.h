@@ -138,8 +138,8 @@ static inline hstpf_real_t hstpf__exp_neg(hstpf_real_t x)
         return v * p;
     }
 #else
-    if (n > 126 || n < 0) {
-        return n < 0 ? 1.0f : 0.0f;
+    if (n > 126) { /* n >= 0: x < 0 and t >= 0 when n is 0 */
+        return 0.0f;
     }
     {
         const uint32_t bits = (uint32_t)(127 - n) << 23;

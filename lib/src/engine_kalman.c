@@ -134,7 +134,7 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         qsv -= ks * qsv;
         qss -= ks * qss;
         qvv = qvv > 0.0 ? qvv : 0.0;
-        qss = qss > 0.0 ? qss : 0.0;
+        /* qss (1 - qss / sy) with qss <= sy: never below 0, even rounded */
     }
     m->kx[0] = ns;
     m->kx[1] = nv > 0.0 ? nv : 0.0; /* a train never reverses */

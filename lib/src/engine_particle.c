@@ -122,7 +122,7 @@ static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     place_cloud(f, m, q);
 }
 
-/* The cumulative count is clamped to [previous, n]; a particle of weight 0
+/* The cumulative count grows with c and is clamped to n; a particle of weight 0
  * never gets a copy, and what round-off leaves of n at the end goes to the
  * last particle of positive weight, so nothing can index past the end. */
 void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
@@ -138,7 +138,7 @@ void hstpf__resample_counts(const real *w, uint16_t n, real u0, uint16_t *cnt)
             const real x = c * (real)n - u0; /* > -1 */
             k = (int32_t)x;                  /* ceil without libm: */
             k += (real)k < x ? 1 : 0;        /* a double call on an M4 */
-            k = k < (int32_t)prev ? (int32_t)prev : (k > (int32_t)n ? (int32_t)n : k);
+            k = k > (int32_t)n ? (int32_t)n : k; /* >= prev: c only grows */
         }
         cnt[i] = (uint16_t)(k - (int32_t)prev);
         prev = (uint16_t)k;

@@ -52,9 +52,9 @@ static int in_ranges(const hstpf_estimate_t *o)
             return 0;
         }
     }
+    /* (the sds are square roots of values clamped at 0: never negative) */
     return fabs(o->position_m) <= HSTPF_POS_MAX_M && o->speed_mps >= (real)0 &&
-           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->position_sd_m >= 0.0 &&
-           o->speed_sd_mps >= (real)0 && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
+           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
            o->theta[2] >= (real)0;
 }
 

@@ -23,8 +23,8 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     q.v0 = f->cfg.init_speed_mps;
     q.t12 = 0.0;
     if (f->cfg.init_speed_sd <= 0.0) {
-        const double t = f->pend_age_s;
-        if (!f->have_pend || !(t > 0.0 && t <= f->cfg.max_gap_s) ||
+        const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
+        if (!f->have_pend || !(t <= f->cfg.max_gap_s) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
             f->have_pend = 1;
             f->pend_y = y;
@@ -62,7 +62,9 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
 void hstpf__drop_lock(hstpf_t *f, int keep_pend)
 {
     f->have_fix = 0;
-    f->have_pend = (uint8_t)(keep_pend && f->have_pend);
+    if (!keep_pend) {
+        f->have_pend = 0;
+    }
     f->standstill = 0;
     f->weights_wait = 0;
     f->arrival_s = 0.0;

@@ -25,9 +25,9 @@ int32_t hstpf_rng_seed(hstpf_rng_t *rng, uint64_t seed, uint32_t stream)
     rng->s[1] = (uint32_t)(a >> 32);
     rng->s[2] = (uint32_t)b;
     rng->s[3] = (uint32_t)(b >> 32);
-    if ((rng->s[0] | rng->s[1] | rng->s[2] | rng->s[3]) == 0u) {
-        rng->s[0] = 1u; /* the one state xoshiro cannot leave */
-    }
+    /* never all zero (the one state xoshiro cannot leave): splitmix64's
+     * output is a bijection of its state, so a and b, from two different
+     * states, are not both 0 */
     return HSTPF_OK;
 }
 

@@ -33,8 +33,8 @@ uint64_t hstpf_splitmix64(uint64_t *state);
  * @brief Seeds a generator for stream `stream` of `seed`.
  *
  * The state is the 2*stream-th and (2*stream+1)-th splitmix64 outputs of
- * `seed` (low word first); an all-zero result (probability 2^-128) is
- * replaced by a fixed non-zero state.
+ * `seed` (low word first); never all zero (splitmix64's output is a
+ * bijection of its state, so two consecutive outputs are not both 0).
  * @return HSTPF_OK, or HSTPF_E_NULL if rng is NULL.
  * Cost O(stream); no memory besides *rng.
  */

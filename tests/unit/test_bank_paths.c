@@ -1,0 +1,628 @@
+/* The bank's and the engines' less travelled paths, through hstpf.h: the
+ * refusals not met elsewhere (each with its documented code, and the library
+ * running on good data afterwards), the edges of the configuration ranges
+ * (q_floor at its top, declare_hold_s 0, roughening off, refine with an
+ * engine that ignores it), the acquisition's pending fix expiring, estimates
+ * beyond the header's ranges marked invalid, and a lost model redrawn by
+ * each engine. The truth is a train at constant speed under one Table 1
+ * row (traction = its W(v) on a flat track), so every expected value is
+ * derived by hand from the model. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h" /* hstpf__resample_counts: exposed for tests */
+#include "testutil.h"
+
+static hstpf_t f; /* ~200 kB: static, as on a target */
+static hstpf_theta_t rows[4];
+
+#define V_TRUE 50.0  /* m/s */
+#define Y0 5000.0    /* m */
+
+static void base_config(hstpf_config_t *c, hstpf_engine_t engine, uint16_t n_models)
+{
+    assert_int_equal(hstpf_config_default(c), HSTPF_OK);
+    rows[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    rows[1] = hstpf_train_types[hstpf_train_type_find("SS8")];
+    c->models = rows;
+    c->n_models = n_models;
+    c->n_particles = 100;
+    c->seed = 5;
+    c->engine = engine;
+}
+
+/* Traction that holds the first row at V_TRUE on the flat: u = W(v). */
+static double u_hold(void)
+{
+    return hstpf_resistance(&rows[0], V_TRUE);
+}
+
+/* A fix of the truth at time t: small deterministic errors (|e| <= 2 m). */
+static double fix_at(double t)
+{
+    return Y0 + V_TRUE * t + 2.0 * sin(1.7 * t);
+}
+
+static int32_t step(double dt, double u, double y, int has_y)
+{
+    hstpf_input_t in;
+    memset(&in, 0, sizeof in);
+    in.dt_s = dt;
+    in.traction = u;
+    in.position_m = y;
+    in.has_position = (uint8_t)has_y;
+    return hstpf_step(&f, &in);
+}
+
+static hstpf_estimate_t est(void)
+{
+    hstpf_estimate_t e;
+    assert_int_equal(hstpf_estimate(&f, &e), HSTPF_OK);
+    return e;
+}
+
+/* Runs fixes at t = t0 + 1, ..., t0 + n; returns the last time. */
+static double run_fixes(double t0, int n)
+{
+    int k;
+    for (k = 1; k <= n; ++k) {
+        const int32_t rc = step(1.0, u_hold(), fix_at(t0 + k), 1);
+        if (rc != HSTPF_OK) {
+            fail_msg("step at t = %g: %s", t0 + k, hstpf_strerror(rc));
+        }
+    }
+    return t0 + n;
+}
+
+/* ---- refusals ------------------------------------------------------------ */
+
+static void test_refusals(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    hstpf_track_seg_t seg[1];
+    const char *field = NULL;
+    double w = -1.0, sd = -1.0;
+    (void)state;
+    assert_int_equal(hstpf_config_default(NULL), HSTPF_E_NULL);
+    assert_int_equal(hstpf_reset(NULL), HSTPF_E_NULL);
+    memset(&f, 0, sizeof f);
+    assert_int_equal(hstpf_reset(&f), HSTPF_E_INIT); /* never initialised */
+    assert_int_equal(hstpf_reacquire(NULL), HSTPF_E_NULL);
+    assert_int_equal(hstpf_reacquire(&f), HSTPF_E_INIT);
+    assert_int_equal(hstpf_config_check(NULL, &field), HSTPF_E_NULL);
+    assert_string_equal(field, "cfg");
+
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    c.refine = 2;
+    assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_CONFIG);
+    assert_string_equal(field, "refine");
+    c.refine = 1;
+    seg[0].start_m = 0.0;
+    seg[0].gradient_permille = 0.0;
+    seg[0].curve_radius_m = 2e7; /* header: 0 = straight, else >= 100; the table's top is 1e7 */
+    c.track = seg;
+    c.n_track = 1;
+    assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_RANGE);
+    assert_string_equal(field, "track.curve_radius_m");
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_E_RANGE);
+    seg[0].curve_radius_m = 1e7; /* the edge is in range */
+    assert_int_equal(hstpf_config_check(&c, &field), HSTPF_OK);
+    assert_string_equal(field, "");
+
+    /* good data after the refusals: it runs */
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    (void)run_fixes(0.0, 20);
+    e = est();
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, fix_at(20.0), 10.0);
+    /* a reset back to the start: uniform weights, nothing acquired */
+    assert_int_equal(hstpf_reset(&f), HSTPF_OK);
+    e = est();
+    assert_false(e.valid);
+    assert_int_equal(e.acquisitions, 0);
+    assert_float_equal(e.model[0].q, e.model[1].q, 1e-6);
+
+    /* the band: NULL outputs; a non-finite speed; none written */
+    assert_int_equal(hstpf_resistance_band(&e, 10.0, NULL, &sd), HSTPF_E_NULL);
+    assert_int_equal(hstpf_resistance_band(&e, 10.0, &w, NULL), HSTPF_E_NULL);
+    assert_int_equal(hstpf_resistance_band(NULL, 10.0, &w, &sd), HSTPF_E_NULL);
+    assert_int_equal(hstpf_resistance_band(&e, NAN, &w, &sd), HSTPF_E_NONFINITE);
+    assert_true(w == -1.0 && sd == -1.0);
+}
+
+/* A point theta (zero covariance, as a declared row publishes): W by hand,
+ * sd exactly 0. */
+static void test_band_point_theta(void **state)
+{
+    hstpf_estimate_t e;
+    double w, sd;
+    const double v = 25.0, V = 90.0; /* 25 m/s = 90 km/h */
+    (void)state;
+    memset(&e, 0, sizeof e);
+    e.theta[0] = (hstpf_real_t)0.5;
+    e.theta[1] = (hstpf_real_t)0.0625;
+    e.theta[2] = (hstpf_real_t)0.0001220703125; /* 2^-13: exact in float */
+    assert_int_equal(hstpf_resistance_band(&e, v, &w, &sd), HSTPF_OK);
+    assert_float_equal(w, 0.5 + 0.0625 * V + 0.0001220703125 * V * V, 1e-12);
+    assert_true(sd == 0.0);
+}
+
+/* ---- configuration edges -------------------------------------------------- */
+
+/* refine = 1 is used by the Kalman engine only: under the others the
+ * continuous hypothesis stays off (q_offtable 0, gain 1, no FIT_NONE). */
+static void test_refine_ignored_off_kalman(void **state)
+{
+    static const hstpf_engine_t engines[2] = {HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
+    int i;
+    (void)state;
+    for (i = 0; i < 2; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 2);
+        c.refine = 1;
+        c.refine_prior_q = 0.4;
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        (void)run_fixes(0.0, 30);
+        e = est();
+        assert_true(e.valid);
+        assert_true(e.q_offtable == 0);
+        assert_true(e.gain == 1);
+        assert_true(e.fit != HSTPF_FIT_NONE);
+        /* the rows alone carry the weight */
+        assert_float_equal((double)e.model[0].q + (double)e.model[1].q, 1.0, 1e-5);
+    }
+}
+
+/* declare_hold_s = 0: the leader is declared at the first step its q
+ * exceeds declare_threshold, at that step's time. */
+static void test_declare_hold_zero(void **state)
+{
+    hstpf_config_t c;
+    double t = 0.0;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    c.declare_hold_s = 0.0;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k < 600; ++k) {
+        hstpf_estimate_t e;
+        t = run_fixes(t, 1);
+        e = est();
+        if ((double)e.model[0].q > c.declare_threshold) {
+            assert_int_equal(e.status, HSTPF_STATUS_DECLARED);
+            assert_int_equal(e.declared, 0);
+            assert_float_equal(e.decision_time_s, e.time_s, 1e-9);
+            assert_int_equal(e.fit, HSTPF_FIT_TABLE);
+            return;
+        }
+        assert_int_equal(e.declared, -1);
+    }
+    fail_msg("CRH3 never above the threshold in 600 s");
+}
+
+/* q_floor at the top of its range for one row and the continuous
+ * hypothesis (q_floor < 1 / n_models): both can sit at or below the floor,
+ * so the blend has no weight above it. The estimate stays finite, valid
+ * and on the fixes. */
+static void test_q_floor_top(void **state)
+{
+    hstpf_config_t c;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 1);
+    c.refine = 1;
+    c.refine_prior_q = 0.5;
+    c.q_floor = 0.6;
+    c.withdraw_threshold = 0.6;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k < 60; ++k) {
+        hstpf_estimate_t e;
+        (void)run_fixes((double)k, 1);
+        e = est();
+        if (k >= 1) { /* locked from the second fix */
+            assert_true(e.valid);
+            assert_float_equal(e.position_m, fix_at(k + 1.0), 10.0);
+            assert_float_equal((double)e.speed_mps, V_TRUE, 5.0);
+            assert_float_equal((double)e.model[0].q + (double)e.q_offtable, 1.0, 1e-5);
+        }
+    }
+}
+
+/* Roughening off (k and both minimums 0) with resampling at every fix: the
+ * resampled cloud keeps exact copies; with roughening on it has none. */
+static int distinct_positions(void)
+{
+    static double s[HSTPF_MAX_PARTICLES];
+    static hstpf_real_t v[HSTPF_MAX_PARTICLES];
+    int i, j, n = 0;
+    assert_int_equal(hstpf_particles(&f, 0, s, v, NULL), HSTPF_OK);
+    for (i = 0; i < 100; ++i) {
+        for (j = 0; j < i && !(s[j] == s[i] && v[j] == v[i]); ++j) {
+        }
+        n += j == i;
+    }
+    return n;
+}
+
+static void test_roughening_off(void **state)
+{
+    static const hstpf_bank_t banks[2] = {HSTPF_BANK_INDEPENDENT, HSTPF_BANK_PAIRED};
+    int b;
+    (void)state;
+    for (b = 0; b < 2; ++b) {
+        hstpf_config_t c;
+        base_config(&c, HSTPF_ENGINE_PARTICLE, 2);
+        c.bank = banks[b];
+        c.resample = HSTPF_RESAMPLE_ALWAYS;
+        c.roughening_k = 0.0;
+        c.rough_min_s = 0.0;
+        c.rough_min_v = 0.0;
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        (void)run_fixes(0.0, 10);
+        assert_true(distinct_positions() < 100);
+        assert_true(est().valid);
+        c.roughening_k = 0.2;
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        (void)run_fixes(0.0, 10);
+        assert_int_equal(distinct_positions(), 100);
+    }
+}
+
+/* Weights that are all zero (or not positive): every particle is kept
+ * once (internal.h). */
+static void test_resample_no_weight(void **state)
+{
+    hstpf_real_t w[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    uint16_t cnt[8];
+    int i;
+    (void)state;
+    w[3] = (hstpf_real_t)-1;
+    hstpf__resample_counts(w, 8, (hstpf_real_t)0.5, cnt);
+    for (i = 0; i < 8; ++i) {
+        assert_int_equal(cnt[i], 1);
+    }
+}
+
+/* ---- acquisition ----------------------------------------------------------- */
+
+/* Without a speed prior a fix waits at most max_gap_s for the second: an
+ * older one is replaced, and lock comes from the next pair (docs/model.md). */
+static void test_pending_fix_expires(void **state)
+{
+    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 2);
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
+        for (k = 1; k <= 31; ++k) { /* 31 s without a fix: beyond max_gap_s = 30 */
+            assert_int_equal(step(1.0, u_hold(), 0.0, 0), HSTPF_OK);
+        }
+        assert_int_equal(step(1.0, u_hold(), fix_at(32.0), 1), HSTPF_OK);
+        e = est();
+        assert_int_equal(e.acquisitions, 0);
+        assert_false(e.valid);
+        assert_float_equal(e.position_m, fix_at(32.0), 1e-6); /* the pending fix */
+        assert_int_equal(step(1.0, u_hold(), fix_at(33.0), 1), HSTPF_OK);
+        e = est();
+        assert_int_equal(e.acquisitions, 1);
+        assert_true(e.valid);
+        assert_float_equal((double)e.speed_mps, fix_at(33.0) - fix_at(32.0), 3.0);
+        (void)run_fixes(33.0, 20);
+        e = est();
+        assert_true(e.valid);
+        assert_float_equal(e.position_m, fix_at(53.0), 10.0);
+    }
+}
+
+/* ---- validity at the edges of the ranges ----------------------------------- */
+
+/* A train predicted past HSTPF_POS_MAX_M is not valid; so is one whose
+ * speed passes HSTPF_SPEED_MAX. Each engine; the speed prior starts the
+ * filter from the first fix. */
+static void test_beyond_ranges_invalid(void **state)
+{
+    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 1);
+        c.init_speed_mps = 100.0;
+        c.init_speed_sd = 1.0;
+        /* position: 500 m short of the limit at 100 m/s, held (u = W) */
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        assert_int_equal(step(1.0, 0.0, HSTPF_POS_MAX_M - 500.0, 1), HSTPF_OK);
+        e = est();
+        assert_true(e.valid);
+        for (k = 1; k <= 10; ++k) {
+            assert_int_equal(step(1.0, hstpf_resistance(&rows[0], 100.0), 0.0, 0), HSTPF_OK);
+            e = est();
+            /* 100 m/s: past the limit after 5 s (with a few m of spread) */
+            if (k <= 4) {
+                assert_true(e.valid);
+            } else if (k >= 6) {
+                assert_true(e.position_m > HSTPF_POS_MAX_M);
+                assert_false(e.valid);
+            }
+        }
+        /* speed: full traction, about 9 m/s^2, passes 200 m/s within 15 s */
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        assert_int_equal(step(1.0, 0.0, 1000.0, 1), HSTPF_OK);
+        for (k = 1; k <= 20; ++k) {
+            assert_int_equal(step(1.0, HSTPF_U_MAX, 0.0, 0), HSTPF_OK);
+            e = est();
+            if ((double)e.speed_mps < 190.0) {
+                assert_true(e.valid);
+            } else if ((double)e.speed_mps > HSTPF_SPEED_MAX + 1.0) {
+                assert_false(e.valid);
+            }
+        }
+        assert_true((double)e.speed_mps > HSTPF_SPEED_MAX + 1.0);
+        assert_false(e.valid);
+    }
+}
+
+/* ---- a lost model redrawn --------------------------------------------------- */
+
+/* model_reacquire_after: a row far from the truth (c2 at its top, 0.01:
+ * W(180 km/h) = 324 N/kN more, about 3 m/s^2 of deceleration where the
+ * train holds its speed) loses the
+ * fixes and is redrawn at them; the right row never is, and the blended
+ * estimate stays on the fixes. Each engine (the grid and particle engines
+ * place it with the blended speed). */
+static void test_lost_model_redrawn(void **state)
+{
+    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
+    int i;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 2);
+        rows[1] = rows[0];
+        rows[1].name = "heavy";
+        rows[1].c2 = 0.01;
+        c.model_reacquire_after = 2;
+        c.q_floor = 1e-6;
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        (void)run_fixes(0.0, 120);
+        e = est();
+        if (e.model[1].reacquired == 0) {
+            fail_msg("engine %d: the wrong row was never redrawn", (int)engines[i]);
+        }
+        assert_int_equal(e.model[0].reacquired, 0);
+        assert_true(e.model[1].floor_hits > 0);
+        assert_true(e.valid);
+        assert_true((double)e.model[0].q > 0.99);
+        assert_float_equal(e.position_m, fix_at(120.0), 10.0);
+        assert_float_equal((double)e.speed_mps, V_TRUE, 3.0);
+    }
+}
+
+/* ---- the grid engine at its narrow edges ------------------------------------ */
+
+/* Noise of a millimetre on every channel and exact fixes: the boxes are
+ * narrower than the grid's narrowest cells (1 mm x 48, 0.1 mm/s x 48) and
+ * are widened to them; the estimate is the truth to within a few cells. */
+static void test_grid_tiny_noise(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    c.noise_s.sd = 1e-3;
+    c.noise_v.sd = 1e-3;
+    c.noise_e.sd = 1e-3;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 30; ++k) {
+        assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE * k, 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0 + V_TRUE * 30.0, 0.05);
+    assert_float_equal((double)e.speed_mps, V_TRUE, 0.01);
+    assert_true((double)e.model[0].q > 0.99); /* SS8 cannot hold 50 m/s on CRH3's traction */
+}
+
+/* A slow train (2 m/s), fixes to 5 cm, and a row that stops it within
+ * seconds (c0 at its top, 50 N/kN): that row loses the fixes and is
+ * redrawn at the fix with the blended speed, its speed box then reaching
+ * down to rest. */
+static void test_grid_slow_redraw(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    rows[1] = rows[0];
+    rows[1].name = "stopper";
+    rows[1].c0 = 50.0;
+    c.noise_s.sd = 0.01;
+    c.noise_v.sd = 0.01;
+    c.noise_e.sd = 0.05;
+    c.model_reacquire_after = 2;
+    c.q_floor = 1e-6;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 120; ++k) {
+        const double u = hstpf_resistance(&rows[0], 2.0);
+        assert_int_equal(step(1.0, u, Y0 + 2.0 * k, 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.model[1].reacquired > 0);
+    assert_int_equal(e.model[0].reacquired, 0);
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0 + 240.0, 0.5);
+    assert_float_equal((double)e.speed_mps, 2.0, 0.1);
+}
+
+/* A standing train whose brakes hold against 40 N/kN (a row with c0 = 50:
+ * at rest only c0 acts) and a row with no resistance, which that traction
+ * sets rolling at 0.37 m/s^2: it leaves the fixes, is redrawn at them with
+ * the blended speed, 0, so its speed box starts at rest. The estimate stays
+ * at the standing train. */
+static void test_grid_standing_redraw(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    rows[0].name = "held";
+    rows[0].c0 = 50.0;
+    rows[1].name = "free";
+    rows[1].c0 = rows[1].c1 = rows[1].c2 = 0.0;
+    c.noise_s.sd = 0.01; /* 0.37 m/s^2 is then 37 sd of speed noise a step */
+    c.noise_v.sd = 0.01;
+    c.noise_e.sd = 0.05;
+    c.model_reacquire_after = 2;
+    c.q_floor = 1e-6;
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (k = 0; k <= 180; ++k) {
+        assert_int_equal(step(1.0, 40.0, Y0 + 0.02 * sin(1.7 * k), 1), HSTPF_OK);
+    }
+    e = est();
+    assert_true(e.model[1].reacquired > 0);
+    assert_int_equal(e.model[0].reacquired, 0);
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, Y0, 0.1);
+    assert_true((double)e.speed_mps < 0.05);
+}
+
+/* ---- a table density whose variance cancels ---------------------------------- */
+
+/* All the mass of a TABLE density in a 3.3 um sliver at the end of a 1 km
+ * support: its variance (about 1e-12 m^2) is lost to round-off in the
+ * moments taken from the table's start (hstpf_dist_init clamps it at 0
+ * rather than take the root of a negative number). The tables stay usable:
+ * finite, every sample in the sliver (to float resolution at 1000 m, 6e-5),
+ * the density there far above the empty part. */
+static void test_table_sliver(void **state)
+{
+    static hstpf_dist_t d;
+    static const double x[3] = {0.0, 1000.0, 1000.0 + 3.3e-6}, p[3] = {0.0, 0.0, 1.0};
+    hstpf_dist_spec_t sp;
+    uint32_t r;
+    (void)state;
+    memset(&sp, 0, sizeof sp);
+    sp.kind = HSTPF_DIST_TABLE;
+    sp.table_x = x;
+    sp.table_p = p;
+    sp.table_n = 3;
+    assert_int_equal(hstpf_dist_init(&d, &sp), HSTPF_OK);
+    assert_true(isfinite((double)d.sd) && d.sd >= 0 && (double)d.sd < 1e-3);
+    assert_float_equal((double)d.mean, 1000.0, 1e-3);
+    for (r = 0; r < 64; ++r) {
+        const double v = (double)hstpf_dist_sample(&d, r * 67108864u + 12345u);
+        assert_float_equal(v, 1000.0, 2e-4);
+    }
+    assert_true(isfinite((double)hstpf_dist_logpdf(&d, (hstpf_real_t)1000.0)));
+    assert_true(hstpf_dist_logpdf(&d, (hstpf_real_t)1000.0) > hstpf_dist_logpdf(&d, (hstpf_real_t)500.0) + 10);
+}
+
+/* ---- the validity invariant under injected faults ------------------------- */
+
+/* States that no input produces (the engines clamp speeds at 0, theta is a
+ * mixture of non-negative rows): injected into a locked instance, each
+ * must read valid = 0 (hstpf.h: "every published value finite and within
+ * the ranges"); the untouched instance reads valid = 1. */
+static void test_validity_injected(void **state)
+{
+    static hstpf_t good;
+    hstpf_config_t c;
+    int i;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    (void)run_fixes(0.0, 10);
+    good = f;
+    assert_true(est().valid);
+    for (i = 0; i < 6; ++i) {
+        f = good;
+        switch (i) {
+        case 0: f.m[0].s_mean = (hstpf_real_t)NAN; break;
+        case 1: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)-1; break; /* reversing */
+        case 2: f.theta[0].c0 = f.theta[1].c0 = -1.0; break;
+        case 3: f.theta[0].c1 = f.theta[1].c1 = -0.1; break;
+        case 4: f.theta[0].c2 = f.theta[1].c2 = -0.001; break;
+        default: f.m[0].v_mean = f.m[1].v_mean = (hstpf_real_t)(HSTPF_SPEED_MAX + 10.0); break;
+        }
+        if (est().valid) {
+            fail_msg("fault %d published as valid", i);
+        }
+    }
+    f = good;
+    assert_true(est().valid);
+}
+
+/* A filter whose weights went non-finite starts again with uniform
+ * weights; one whose state went non-finite on a step whose fix was gated
+ * still answers HSTPF_E_OUTLIER (the step was taken) and counts the reset. */
+static void test_nonfinite_paths(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    (void)run_fixes(0.0, 30);
+    e = est();
+    assert_true(fabs((double)e.model[0].q - 0.5) > 0.01); /* the data moved the weights */
+    f.m[1].logq = NAN;
+    assert_int_equal(step(1.0, u_hold(), fix_at(31.0), 1), HSTPF_OK);
+    e = est();
+    assert_int_equal(e.nonfinite_resets, 1);
+    assert_false(e.valid);
+    /* uniform over the three hypotheses: two rows and the continuous one */
+    assert_float_equal((double)e.model[0].q, 1.0 / 3.0, 1e-6);
+    assert_float_equal((double)e.model[1].q, 1.0 / 3.0, 1e-6);
+    assert_float_equal((double)e.q_offtable, 1.0 / 3.0, 1e-6);
+    (void)run_fixes(31.0, 5); /* re-acquired from the next fixes */
+    e = est();
+    assert_true(e.valid);
+    assert_int_equal(e.acquisitions, 2);
+    assert_float_equal(e.position_m, fix_at(36.0), 10.0);
+
+    f.m[0].kx[1] = NAN; /* the state; the gate still sees the published means */
+    assert_int_equal(step(1.0, u_hold(), fix_at(37.0) + 5000.0, 1), HSTPF_E_OUTLIER);
+    e = est();
+    assert_int_equal(e.outliers, 1);
+    assert_int_equal(e.nonfinite_resets, 2);
+    assert_false(e.valid);
+    (void)run_fixes(37.0, 5);
+    e = est();
+    assert_true(e.valid);
+    assert_float_equal(e.position_m, fix_at(42.0), 10.0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_band_point_theta),
+        cmocka_unit_test(test_refine_ignored_off_kalman),
+        cmocka_unit_test(test_declare_hold_zero),
+        cmocka_unit_test(test_q_floor_top),
+        cmocka_unit_test(test_roughening_off),
+        cmocka_unit_test(test_resample_no_weight),
+        cmocka_unit_test(test_pending_fix_expires),
+        cmocka_unit_test(test_beyond_ranges_invalid),
+        cmocka_unit_test(test_lost_model_redrawn),
+        cmocka_unit_test(test_grid_tiny_noise),
+        cmocka_unit_test(test_grid_slow_redraw),
+        cmocka_unit_test(test_grid_standing_redraw),
+        cmocka_unit_test(test_table_sliver),
+        cmocka_unit_test(test_validity_injected),
+        cmocka_unit_test(test_nonfinite_paths),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
