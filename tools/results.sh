@@ -45,6 +45,8 @@ for s in paper1 all17 stops; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
 done
 .venv/bin/python tools/figures/theta_limit.py --json "$out/theta_limit.json" | tee "$out/theta_limit.txt"
+.venv/bin/python tools/figures/theta_limit.py --scale 1.1 1.1 1.1 | tee "$out/theta_limit_mass10.txt"
+.venv/bin/python tools/figures/theta_limit.py --scale 1.2 0.8 1.2 | tee "$out/theta_limit_off20.txt"
 echo "== particle engine on the Gaussian cases (the paper's method) and on Case 2"
 for s in paper1 all17 paper2; do
   "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --engine particle | tee "$out/$s-particle.txt"
