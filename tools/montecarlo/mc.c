@@ -540,6 +540,9 @@ static const scenario_t scenarios[] = {
     {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
     {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
     {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
+    /* all 17 types with the paper's Case 2 (Gamma) noise (issue 13) */
+    {"all17-case2", 2, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
+    {"all17-coast-case2", 2, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
     {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
     {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0},
     /* journeys: 17 types, Case 1 noise, the holding brake reported at rest */
@@ -729,13 +732,21 @@ static void print_offtable(const work_t *w, int seeds)
     free(werr);
 }
 
+static const char *engine_name(int e)
+{
+    return e == HSTPF_ENGINE_PARTICLE ? "particle"
+           : e == HSTPF_ENGINE_KALMAN ? "kalman"
+           : e == HSTPF_ENGINE_GRID   ? "grid"
+                                      : "auto";
+}
+
 static void usage(void)
 {
     size_t i;
     fprintf(stderr,
             "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
-            "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
+            "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine]\n"
@@ -916,11 +927,13 @@ int main(int argc, char **argv)
             perror(json);
             return 1;
         }
-        fprintf(jf, "{\"scenario\":\"%s\",\"seeds\":%d,\"duration_s\":%.0f,\"particles\":%u,\"results\":[",
-                sc.name, seeds, sc.duration_s, (unsigned)st.base.n_particles);
+        fprintf(jf,
+                "{\"scenario\":\"%s\",\"engine\":\"%s\",\"seeds\":%d,\"duration_s\":%.0f,\"particles\":%u,"
+                "\"results\":[",
+                sc.name, engine_name(st.base.engine), seeds, sc.duration_s, (unsigned)st.base.n_particles);
     }
-    printf("scenario %s: %d models, %d seeds, %.0f s, M = %u\n", sc.name, n_models, seeds,
-           sc.duration_s, (unsigned)st.base.n_particles);
+    printf("scenario %s: %d models, %d seeds, %.0f s, engine %s, M = %u\n", sc.name, n_models, seeds,
+           sc.duration_s, engine_name(st.base.engine), (unsigned)st.base.n_particles);
     if (sc.tt) {
         print_journey(&w, models, truths, seeds, jf);
         print_offtable(&w, seeds);
