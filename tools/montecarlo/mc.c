@@ -1008,10 +1008,15 @@ int main(int argc, char **argv)
     }
     if (w.n_jobs > 1) {
         const int runs = w.n_jobs * seeds;
+        double sp = 0.0, sv = 0.0;
+        for (i = 0; i < runs; ++i) {
+            sp += w.runs[i].pos_rms * w.runs[i].pos_rms;
+            sv += w.runs[i].spd_rms * w.runs[i].spd_rms;
+        }
         printf("total: %d runs, success %.1f%%, false declarations %d (%.1f%%), W(v) error > 5%% in %d "
-               "(%.1f%%), worst truth's mean W(v) error %.2f%%\n",
+               "(%.1f%%), worst truth's mean W(v) error %.2f%%, position RMS %.3f m, speed RMS %.4f m/s\n",
                runs, 100.0 * tot_s / runs, tot_f, 100.0 * tot_f / runs, tot_w, 100.0 * tot_w / runs,
-               100.0 * worst_w);
+               100.0 * worst_w, sqrt(sp / runs), sqrt(sv / runs));
     }
     if (jf) {
         fprintf(jf, "]}\n");
