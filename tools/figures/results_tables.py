@@ -115,11 +115,12 @@ def wrong_types(js: dict) -> str:
 
 def issue13(d: Path, scenario: str) -> str:
     """One row per engine that has an output: hstpf-mc's total line; the
-    pooled median decision time, the wrong types and the pooled state RMS
-    from its JSON."""
+    pooled median decision time, the wrong types, the runs that end on a
+    wrong type and the pooled state RMS from its JSON."""
     out = ["| engine | runs | success | decision x_med [s] | false declarations | wrong types (truth -> declared) "
-           "| W(v) error > 5 % | worst truth's mean W(v) error | position RMS [m] | speed RMS [m/s] |",
-           "|" + "---|" * 10]
+           "| a wrong type declared at the end | W(v) error > 5 % | worst truth's mean W(v) error "
+           "| position RMS [m] | speed RMS [m/s] |",
+           "|" + "---|" * 11]
     for tag, label in ENGINES:
         if scenario.startswith("heavy") and tag == "particle256":
             label = "particles, M = 256, roughening 0.7 (a table takes no blur)"
@@ -129,15 +130,16 @@ def issue13(d: Path, scenario: str) -> str:
         t = last(f, "total:")
         js = json.loads((d / f"{scenario}-{tag}.json").read_text())
         runs = [r for tr in js["results"] for r in tr["runs"]]
+        wrong_end = sum(1 for tr in js["results"] for r in tr["runs"] if r["final_declared"] not in ("", tr["truth"]))
         xm = median([r["t_cross"] for r in runs if r["success"]])
         # pooled over the runs: the root of the mean of each run's mean square
         prms = (sum(r["pos_rms"] ** 2 for r in runs) / len(runs)) ** 0.5
         vrms = (sum(r["spd_rms"] ** 2 for r in runs) / len(runs)) ** 0.5
-        out.append("| {} | {} | {} | {} | {} ({}) | {} | {} ({}) | {} | {} | {} |".format(
+        out.append("| {} | {} | {} | {} | {} ({}) | {} | {} | {} ({}) | {} | {} | {} |".format(
             label, num(r"total: (\d+) runs", t), num(r"success ([\d.]+%)", t),
             f"{xm:.0f}" if xm is not None else "-",
             num(r"false declarations (\d+)", t), num(r"false declarations \d+ \(([\d.]+%)\)", t),
-            wrong_types(js), num(r"W\(v\) error > 5% in (\d+)", t), num(r"W\(v\) error > 5% in \d+ \(([\d.]+%)\)", t),
+            wrong_types(js), wrong_end, num(r"W\(v\) error > 5% in (\d+)", t), num(r"W\(v\) error > 5% in \d+ \(([\d.]+%)\)", t),
             num(r"worst truth's mean W\(v\) error ([\d.]+%)", t), f"{prms:.3f}", f"{vrms:.4f}"))
     return "\n".join(out)
 
