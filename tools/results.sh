@@ -67,6 +67,8 @@ for s in heavy-t heavy-mix; do
   "$mc" --scenario "$s" --seeds "$gseeds" --engine grid --json "$out/$s-grid.json" | tee "$out/$s-grid.txt"
   "$mc" --scenario "$s" --seeds "$gseeds" --rough 0.7 --engine particle --particles 256 \
     --json "$out/$s-particle256.json" | tee "$out/$s-particle256.txt"
+  # reference: the filter told only a Gaussian of the noise's sd (the Kalman engine)
+  "$mc" --scenario "$s" --seeds "$gseeds" --gauss-e --json "$out/$s-gauss.json" | tee "$out/$s-gauss.txt"
 done
 echo "== declaration rule (17 types, both engines)"
 {

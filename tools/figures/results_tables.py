@@ -94,7 +94,8 @@ ISSUE13 = {
 }
 ENGINES = [("grid", "grid 48 x 48 (library defaults)"),
            ("particle", "particles, M = 100 (the library's), blur 0.2 m, roughening 0.7"),
-           ("particle256", "particles, M = 256, blur 0.2 m, roughening 0.7")]
+           ("particle256", "particles, M = 256, blur 0.2 m, roughening 0.7"),
+           ("gauss", "reference: Kalman, told only N(0, sd^2) of the noise (`--gauss-e`)")]
 
 
 def median(v):

@@ -73,6 +73,7 @@ typedef struct {
     hstpf_config_t base;
     double floor_depth, edge_soft;
     int floor_set, soft_set;
+    int gauss_e;                /* the filter is told a Gaussian of e's sd, not e's density */
 } settings_t;
 
 typedef struct {
@@ -261,6 +262,19 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
     cfg.noise_e = sc.noise_e;
+    if (w->st->gauss_e && cfg.noise_e.kind != HSTPF_DIST_GAUSSIAN) {
+        /* a filter that knows only the variance: what knowing the density buys */
+        hstpf_dist_t *de = malloc(sizeof *de);
+        if (de == NULL || hstpf_dist_init(de, &cfg.noise_e) != HSTPF_OK) {
+            fprintf(stderr, "hstpf-mc: --gauss-e: the position noise does not build\n");
+            exit(1);
+        }
+        memset(&cfg.noise_e, 0, sizeof cfg.noise_e);
+        cfg.noise_e.kind = HSTPF_DIST_GAUSSIAN;
+        cfg.noise_e.mean = (double)de->mean;
+        cfg.noise_e.sd = (double)de->sd;
+        free(de);
+    }
     if (w->st->floor_set) {
         cfg.noise_e.floor_depth = w->st->floor_depth;
     }
@@ -758,6 +772,7 @@ static void usage(void)
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine]\n"
+            "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -794,6 +809,10 @@ int main(int argc, char **argv)
         }
         if (!strcmp(a, "--progress")) {
             progress = progress ? progress : 2; /* 2: asked for, not a terminal */
+            continue;
+        }
+        if (!strcmp(a, "--gauss-e")) {
+            st.gauss_e = 1;
             continue;
         }
         if (!strcmp(a, "--refine") || !strcmp(a, "--no-refine")) {
