@@ -111,6 +111,7 @@ typedef struct {
     pthread_mutex_t lock;
     const char *trace_path;     /* run of trace_seed of the first job */
     int trace_seed;
+    int first_seed;             /* seeds first_seed .. first_seed + seeds - 1 */
 } work_t;
 
 static const hstpf_track_seg_t hilly_track[] = {
@@ -467,10 +468,11 @@ static void *worker(void *arg)
         }
         job = idx / w->seeds;
         seed = idx % w->seeds;
-        if (job == 0 && seed + 1 == w->trace_seed && w->trace_path) {
+        seed += w->first_seed;
+        if (job == 0 && seed == w->trace_seed && w->trace_path) {
             trace = fopen(w->trace_path, "w");
         }
-        one_run(w, w->truths[job], seed + 1, &w->runs[idx], trace);
+        one_run(w, w->truths[job], seed, &w->runs[idx], trace);
         if (trace) {
             fclose(trace);
         }
@@ -687,7 +689,7 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
                         "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
                         "\"w_rms\":%.5g,\"tv\":[",
-                        i ? "," : "", i + 1, r->false_decl, r->false_time,
+                        i ? "," : "", w->first_seed + i, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
                         q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
                         r->w_rms);
@@ -766,7 +768,7 @@ static void usage(void)
 {
     size_t i;
     fprintf(stderr,
-            "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
+            "usage: hstpf-mc --scenario NAME [--seeds N [--first-seed K]] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
             "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
@@ -801,6 +803,7 @@ int main(int argc, char **argv)
     (void)hstpf_config_default(&st.base);
     memset(&w, 0, sizeof w);
     w.trace_seed = 1;
+    w.first_seed = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--version")) {
@@ -839,6 +842,8 @@ int main(int argc, char **argv)
             json = v;
         } else if (!strcmp(a, "--trace")) {
             w.trace_path = v;
+        } else if (!strcmp(a, "--first-seed")) {
+            w.first_seed = atoi(v);
         } else if (!strcmp(a, "--trace-seed")) {
             w.trace_seed = atoi(v);
         } else if (!strcmp(a, "--engine")) {
@@ -894,7 +899,7 @@ int main(int argc, char **argv)
             break;
         }
     }
-    if (scen == NULL || i == (int)(sizeof scenarios / sizeof scenarios[0]) || seeds < 1 ||
+    if (scen == NULL || i == (int)(sizeof scenarios / sizeof scenarios[0]) || seeds < 1 || w.first_seed < 1 ||
         threads < 1 || threads > 16) {
         usage();
         return 2;
@@ -1013,7 +1018,7 @@ int main(int argc, char **argv)
                         "\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\",\"final_declared\":\"%s\",\"par_err\":[%.5g,%.5g,%.5g],"
                         "\"par_err_max_after\":[%.5g,%.5g,%.5g],\"w_rms\":%.5g,\"pos_rms\":%.4g,"
                         "\"spd_rms\":%.4g,\"q_true_end\":%.6g,\"floor_hits_true\":%u}",
-                        i ? "," : "", i + 1, r->success, r->t_cross, r->t_declare, r->false_decl, r->false_time,
+                        i ? "," : "", w.first_seed + i, r->success, r->t_cross, r->t_declare, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "",
                         r->final_declared >= 0 ? models[r->final_declared].name : "", r->par_err[0],
                         r->par_err[1], r->par_err[2], r->par_err_max_after[0], r->par_err_max_after[1],
