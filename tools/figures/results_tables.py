@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
 """Markdown tables for docs/results.md from the outputs of tools/results.sh
-(out/results/*.txt): the journeys' totals and the trains not on Table 1,
-so that the figures in the document are the run's, not retyped."""
+(out/results/*.txt, *.json): the journeys' totals, the trains not on
+Table 1 and issue 13's scenarios (one table each, grid and particle engines
+side by side), so that the figures in the document are the run's, not
+retyped."""
 import argparse
+import json
 import re
 import sys
 from pathlib import Path
@@ -83,17 +86,83 @@ def studies(d: Path) -> str:
     return "\n".join(out)
 
 
+ISSUE13 = {
+    "all17-case2": "all 17 types, Case 2 noise, paper profile",
+    "all17-coast-case2": "all 17 types, Case 2 noise, coast-and-brake profile",
+    "heavy-t": "all 17 types, Student-t(3) position noise, paper profile",
+    "heavy-mix": "all 17 types, 95/5 % multipath mixture position noise, paper profile",
+}
+ENGINES = [("grid", "grid 48 x 48 (library defaults)"),
+           ("particle", "particles, M = 100 (the library's), blur 0.2 m, roughening 0.7"),
+           ("particle256", "particles, M = 256, blur 0.2 m, roughening 0.7"),
+           ("gauss", "reference: Kalman, told only N(0, sd^2) of the noise (`--gauss-e`)")]
+
+
+def median(v):
+    v = sorted(v)
+    return v[(len(v) - 1) // 2] if v else None
+
+
+def wrong_types(js: dict) -> str:
+    """The runs that declared a wrong type, as 'truth -> declared (runs)'."""
+    pairs = {}
+    for tr in js["results"]:
+        for r in tr["runs"]:
+            if r["false_decl"]:
+                key = f"{tr['truth']} -> {r['false_model']}"
+                pairs[key] = pairs.get(key, 0) + 1
+    return "; ".join(f"{k} ({n})" for k, n in sorted(pairs.items(), key=lambda kv: (-kv[1], kv[0]))) or "none"
+
+
+def issue13(d: Path, scenario: str) -> str:
+    """One row per engine that has an output: hstpf-mc's total line; the
+    pooled median decision time, the wrong types, the runs that end on a
+    wrong type and the pooled state RMS from its JSON."""
+    out = ["| engine | runs | success | decision x_med [s] | false declarations | wrong types (truth -> declared) "
+           "| a wrong type declared at the end | W(v) error > 5 % | worst truth's mean W(v) error "
+           "| position RMS [m] | speed RMS [m/s] |",
+           "|" + "---|" * 11]
+    for tag, label in ENGINES:
+        if scenario.startswith("heavy") and tag == "particle256":
+            label = "particles, M = 256, roughening 0.7 (a table takes no blur)"
+        f = d / f"{scenario}-{tag}.txt"
+        if not f.exists():
+            continue
+        t = last(f, "total:")
+        js = json.loads((d / f"{scenario}-{tag}.json").read_text())
+        runs = [r for tr in js["results"] for r in tr["runs"]]
+        wrong_end = sum(1 for tr in js["results"] for r in tr["runs"] if r["final_declared"] not in ("", tr["truth"]))
+        xm = median([r["t_cross"] for r in runs if r["success"]])
+        # pooled over the runs: the root of the mean of each run's mean square
+        prms = (sum(r["pos_rms"] ** 2 for r in runs) / len(runs)) ** 0.5
+        vrms = (sum(r["spd_rms"] ** 2 for r in runs) / len(runs)) ** 0.5
+        out.append("| {} | {} | {} | {} | {} ({}) | {} | {} | {} ({}) | {} | {} | {} |".format(
+            label, num(r"total: (\d+) runs", t), num(r"success ([\d.]+%)", t),
+            f"{xm:.0f}" if xm is not None else "-",
+            num(r"false declarations (\d+)", t), num(r"false declarations \d+ \(([\d.]+%)\)", t),
+            wrong_types(js), wrong_end, num(r"W\(v\) error > 5% in (\d+)", t), num(r"W\(v\) error > 5% in \d+ \(([\d.]+%)\)", t),
+            num(r"worst truth's mean W\(v\) error ([\d.]+%)", t), f"{prms:.3f}", f"{vrms:.4f}"))
+    return "\n".join(out)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--dir", default="out/results", help="tools/results.sh's output folder")
+    p.add_argument("--issue13-only", action="store_true",
+                   help="only issue 13's scenario tables (a folder with just those outputs)")
     a = p.parse_args(argv)
     d = Path(a.dir)
-    print("### Every study, current library\n")
-    print(studies(d))
-    print("\n### Journeys, totals\n")
-    print(journeys(d))
-    print("\n### Trains not on Table 1\n")
-    print(offtable(d))
+    if not a.issue13_only:
+        print("### Every study, current library\n")
+        print(studies(d))
+        print("\n### Journeys, totals\n")
+        print(journeys(d))
+        print("\n### Trains not on Table 1\n")
+        print(offtable(d))
+    for sc, title in ISSUE13.items():
+        if any((d / f"{sc}-{tag}.txt").exists() for tag, _ in ENGINES):
+            print(f"\n### `{sc}`: {title}\n")
+            print(issue13(d, sc))
     return 0
 
 

@@ -21,7 +21,8 @@
 
 typedef struct {
     const char *name;
-    int paper_case;             /* 1 or 2: noise of the paper's case */
+    int paper_case;             /* 1 or 2: noise of the paper's case; 3 or 4: Case 1 with the
+                                 * Student-t or the multipath-mixture position noise */
     hstpf_profile_t profile;
     double loss_rate;
     int all17;                  /* models: all 17 types; else the case's 3 */
@@ -74,6 +75,7 @@ typedef struct {
     hstpf_config_t base;
     double floor_depth, edge_soft;
     int floor_set, soft_set;
+    int gauss_e;                /* the filter is told a Gaussian of e's sd, not e's density */
 } settings_t;
 
 typedef struct {
@@ -111,6 +113,7 @@ typedef struct {
     pthread_mutex_t lock;
     const char *trace_path;     /* run of trace_seed of the first job */
     int trace_seed;
+    int first_seed;             /* seeds first_seed .. first_seed + seeds - 1 */
 } work_t;
 
 static const hstpf_track_seg_t hilly_track[] = {
@@ -191,6 +194,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     hstpf_t *f = malloc(sizeof *f); /* the tool, not the library, allocates */
     hstpf_config_t cfg = w->st->base;
     hstpf_sim_config_t sc;
+    hstpf_sim_table_t etab; /* a heavy position noise's table: lives for the run */
     hstpf_sim_t sim;
     hstpf_estimate_t est;
     hstpf_sim_sample_t smp;
@@ -223,6 +227,9 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     sc.loss_rate = w->sc->loss_rate;
     if (w->sc->paper_case == 2) {
         hstpf_sim_case2(&sc);
+    } else if (w->sc->paper_case >= 3) {
+        /* drawn exactly by the simulator; the filter gets the same density as a table */
+        hstpf_sim_heavy(&sc, w->sc->paper_case == 3 ? HSTPF_SIM_HEAVY_T : HSTPF_SIM_HEAVY_MIX, &etab);
     }
     if (w->sc->hilly) {
         sc.track = hilly_track;
@@ -262,6 +269,19 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
     cfg.noise_e = sc.noise_e;
+    if (w->st->gauss_e && cfg.noise_e.kind != HSTPF_DIST_GAUSSIAN) {
+        /* a filter that knows only the variance: what knowing the density buys */
+        hstpf_dist_t *de = malloc(sizeof *de);
+        if (de == NULL || hstpf_dist_init(de, &cfg.noise_e) != HSTPF_OK) {
+            fprintf(stderr, "hstpf-mc: --gauss-e: the position noise does not build\n");
+            exit(1);
+        }
+        memset(&cfg.noise_e, 0, sizeof cfg.noise_e);
+        cfg.noise_e.kind = HSTPF_DIST_GAUSSIAN;
+        cfg.noise_e.mean = (double)de->mean;
+        cfg.noise_e.sd = (double)de->sd;
+        free(de);
+    }
     if (w->st->floor_set) {
         cfg.noise_e.floor_depth = w->st->floor_depth;
     }
@@ -463,10 +483,11 @@ static void *worker(void *arg)
         }
         job = idx / w->seeds;
         seed = idx % w->seeds;
-        if (job == 0 && seed + 1 == w->trace_seed && w->trace_path) {
+        seed += w->first_seed;
+        if (job == 0 && seed == w->trace_seed && w->trace_path) {
             trace = fopen(w->trace_path, "w");
         }
-        one_run(w, w->truths[job], seed + 1, &w->runs[idx], trace);
+        one_run(w, w->truths[job], seed, &w->runs[idx], trace);
         if (trace) {
             fclose(trace);
         }
@@ -555,6 +576,12 @@ static const scenario_t scenarios[] = {
     {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    /* all 17 types with the paper's Case 2 (Gamma) noise (issue 13) */
+    {"all17-case2", 2, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"all17-coast-case2", 2, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    /* heavy-tailed position noise with Case 1's process noise (issue 13) */
+    {"heavy-t", 3, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"heavy-mix", 4, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     /* journeys: 17 types, Case 1 noise, the holding brake reported at rest */
@@ -682,7 +709,7 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
                         "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
                         "\"w_rms\":%.5g,\"band_covers\":%d,\"nofit_end\":%d,\"q_true_end\":%.4g,\"tv\":[",
-                        i ? "," : "", i + 1, r->false_decl, r->false_time,
+                        i ? "," : "", w->first_seed + i, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
                         q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
                         r->w_rms, r->band_covers, r->nofit_end, r->q_true_end);
@@ -749,16 +776,25 @@ static void print_offtable(const work_t *w, int seeds)
     free(werr);
 }
 
+static const char *engine_name(int e)
+{
+    return e == HSTPF_ENGINE_PARTICLE ? "particle"
+           : e == HSTPF_ENGINE_KALMAN ? "kalman"
+           : e == HSTPF_ENGINE_GRID   ? "grid"
+                                      : "auto";
+}
+
 static void usage(void)
 {
     size_t i;
     fprintf(stderr,
-            "usage: hstpf-mc --scenario NAME [--seeds N] [--threads N] [--duration S]\n"
+            "usage: hstpf-mc --scenario NAME [--seeds N [--first-seed K]] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
-            "  filter settings: [--engine auto|particle|kalman] [--particles M]\n"
+            "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine] [--refine-prior Q]\n"
+            "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -787,6 +823,7 @@ int main(int argc, char **argv)
     (void)hstpf_config_default(&st.base);
     memset(&w, 0, sizeof w);
     w.trace_seed = 1;
+    w.first_seed = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--version")) {
@@ -795,6 +832,10 @@ int main(int argc, char **argv)
         }
         if (!strcmp(a, "--progress")) {
             progress = progress ? progress : 2; /* 2: asked for, not a terminal */
+            continue;
+        }
+        if (!strcmp(a, "--gauss-e")) {
+            st.gauss_e = 1;
             continue;
         }
         if (!strcmp(a, "--refine") || !strcmp(a, "--no-refine")) {
@@ -823,6 +864,8 @@ int main(int argc, char **argv)
             json = v;
         } else if (!strcmp(a, "--trace")) {
             w.trace_path = v;
+        } else if (!strcmp(a, "--first-seed")) {
+            w.first_seed = atoi(v);
         } else if (!strcmp(a, "--trace-seed")) {
             w.trace_seed = atoi(v);
         } else if (!strcmp(a, "--engine")) {
@@ -878,7 +921,7 @@ int main(int argc, char **argv)
             break;
         }
     }
-    if (scen == NULL || i == (int)(sizeof scenarios / sizeof scenarios[0]) || seeds < 1 ||
+    if (scen == NULL || i == (int)(sizeof scenarios / sizeof scenarios[0]) || seeds < 1 || w.first_seed < 1 ||
         threads < 1 || threads > 16) {
         usage();
         return 2;
@@ -938,11 +981,13 @@ int main(int argc, char **argv)
             perror(json);
             return 1;
         }
-        fprintf(jf, "{\"scenario\":\"%s\",\"seeds\":%d,\"duration_s\":%.0f,\"particles\":%u,\"results\":[",
-                sc.name, seeds, sc.duration_s, (unsigned)st.base.n_particles);
+        fprintf(jf,
+                "{\"scenario\":\"%s\",\"engine\":\"%s\",\"seeds\":%d,\"duration_s\":%.0f,\"particles\":%u,"
+                "\"results\":[",
+                sc.name, engine_name(st.base.engine), seeds, sc.duration_s, (unsigned)st.base.n_particles);
     }
-    printf("scenario %s: %d models, %d seeds, %.0f s, M = %u\n", sc.name, n_models, seeds,
-           sc.duration_s, (unsigned)st.base.n_particles);
+    printf("scenario %s: %d models, %d seeds, %.0f s, engine %s, M = %u\n", sc.name, n_models, seeds,
+           sc.duration_s, engine_name(st.base.engine), (unsigned)st.base.n_particles);
     if (sc.tt) {
         print_journey(&w, models, truths, seeds, jf);
         print_offtable(&w, seeds);
@@ -995,7 +1040,7 @@ int main(int argc, char **argv)
                         "\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\",\"final_declared\":\"%s\",\"par_err\":[%.5g,%.5g,%.5g],"
                         "\"par_err_max_after\":[%.5g,%.5g,%.5g],\"w_rms\":%.5g,\"pos_rms\":%.4g,"
                         "\"spd_rms\":%.4g,\"q_true_end\":%.6g,\"floor_hits_true\":%u}",
-                        i ? "," : "", i + 1, r->success, r->t_cross, r->t_declare, r->false_decl, r->false_time,
+                        i ? "," : "", w.first_seed + i, r->success, r->t_cross, r->t_declare, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "",
                         r->final_declared >= 0 ? models[r->final_declared].name : "", r->par_err[0],
                         r->par_err[1], r->par_err[2], r->par_err_max_after[0], r->par_err_max_after[1],
@@ -1009,10 +1054,15 @@ int main(int argc, char **argv)
     }
     if (w.n_jobs > 1) {
         const int runs = w.n_jobs * seeds;
+        double sp = 0.0, sv = 0.0;
+        for (i = 0; i < runs; ++i) {
+            sp += w.runs[i].pos_rms * w.runs[i].pos_rms;
+            sv += w.runs[i].spd_rms * w.runs[i].spd_rms;
+        }
         printf("total: %d runs, success %.1f%%, false declarations %d (%.1f%%), W(v) error > 5%% in %d "
-               "(%.1f%%), worst truth's mean W(v) error %.2f%%\n",
+               "(%.1f%%), worst truth's mean W(v) error %.2f%%, position RMS %.3f m, speed RMS %.4f m/s\n",
                runs, 100.0 * tot_s / runs, tot_f, 100.0 * tot_f / runs, tot_w, 100.0 * tot_w / runs,
-               100.0 * worst_w);
+               100.0 * worst_w, sqrt(sp / runs), sqrt(sv / runs));
     }
     if (jf) {
         fprintf(jf, "]}\n");

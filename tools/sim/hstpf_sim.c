@@ -48,6 +48,51 @@ double hstpf_sim_noise(hstpf_rng_t *r, const hstpf_dist_spec_t *d)
     return d->mean + d->sd * hstpf_sim_gauss(r);
 }
 
+double hstpf_sim_heavy_pdf(const hstpf_sim_heavy_t *h, double x)
+{
+    static const double pi = 3.14159265358979323846;
+    if (h->kind == HSTPF_SIM_HEAVY_T) {
+        const double z = x / h->scale, nu = h->nu;
+        const double lc = lgamma(0.5 * (nu + 1.0)) - lgamma(0.5 * nu) - 0.5 * log(nu * pi);
+        return exp(lc - 0.5 * (nu + 1.0) * log1p(z * z / nu)) / h->scale;
+    }
+    {
+        const double a = x / h->sd, b = x / h->wide_sd, k = 1.0 / sqrt(2.0 * pi);
+        return (1.0 - h->p_wide) * k * exp(-0.5 * a * a) / h->sd + h->p_wide * k * exp(-0.5 * b * b) / h->wide_sd;
+    }
+}
+
+double hstpf_sim_heavy_draw(hstpf_rng_t *r, const hstpf_sim_heavy_t *h)
+{
+    if (h->kind == HSTPF_SIM_HEAVY_T) {
+        /* z / sqrt(chi2(nu) / nu), chi2(nu) = 2 Gamma(nu / 2) */
+        const double z = hstpf_sim_gauss(r), g = hstpf_sim_gamma(r, 0.5 * h->nu);
+        return h->scale * z / sqrt(2.0 * g / h->nu);
+    }
+    {
+        const int wide = u01(r) < h->p_wide; /* the component first, then its draw */
+        return (wide ? h->wide_sd : h->sd) * hstpf_sim_gauss(r);
+    }
+}
+
+void hstpf_sim_heavy_table(const hstpf_sim_heavy_t *h, hstpf_sim_table_t *tab, hstpf_dist_spec_t *spec)
+{
+    const double c = h->kind == HSTPF_SIM_HEAVY_T ? h->scale : h->sd;
+    const double a = asinh(h->range / c);
+    int i;
+    for (i = 0; i < HSTPF_SIM_TABLE_N; ++i) {
+        const int j = i - HSTPF_SIM_TABLE_N / 2; /* symmetric: x[mid] = 0 exactly */
+        const double x = c * sinh(a * (double)j / (double)(HSTPF_SIM_TABLE_N / 2));
+        tab->x[i] = x;
+        tab->p[i] = hstpf_sim_heavy_pdf(h, x);
+    }
+    memset(spec, 0, sizeof *spec);
+    spec->kind = HSTPF_DIST_TABLE;
+    spec->table_x = tab->x;
+    spec->table_p = tab->p;
+    spec->table_n = HSTPF_SIM_TABLE_N;
+}
+
 static void gauss(hstpf_dist_spec_t *d, double var)
 {
     memset(d, 0, sizeof *d);
@@ -75,6 +120,21 @@ void hstpf_sim_case2(hstpf_sim_config_t *c)
     gam(&c->noise_s, 0.02, 0.1);
     gam(&c->noise_v, 0.1, 0.05);
     gam(&c->noise_e, 0.5, 0.2);
+}
+
+void hstpf_sim_heavy(hstpf_sim_config_t *c, hstpf_sim_heavy_kind_t k, hstpf_sim_table_t *tab)
+{
+    hstpf_sim_heavy_t *h = &c->heavy_e;
+    hstpf_sim_case1(c);
+    memset(h, 0, sizeof *h);
+    h->kind = k;
+    h->nu = HSTPF_SIM_T_NU;
+    h->scale = HSTPF_SIM_T_SCALE;
+    h->sd = sqrt(5.0);
+    h->wide_sd = HSTPF_SIM_MIX_WIDE * h->sd;
+    h->p_wide = HSTPF_SIM_MIX_P;
+    h->range = HSTPF_SIM_HEAVY_RANGE;
+    hstpf_sim_heavy_table(h, tab, &c->noise_e);
 }
 
 void hstpf_sim_default(hstpf_sim_config_t *c)
@@ -224,7 +284,8 @@ void hstpf_sim_next(hstpf_sim_t *sim, hstpf_sim_sample_t *o)
     o->t = sim->t;
     o->s = sim->s;
     o->v = sim->v;
-    o->y = sim->s + hstpf_sim_noise(&sim->rng, &c->noise_e);
+    o->y = sim->s + (c->heavy_e.kind != HSTPF_SIM_HEAVY_NONE ? hstpf_sim_heavy_draw(&sim->rng, &c->heavy_e)
+                                                              : hstpf_sim_noise(&sim->rng, &c->noise_e));
     o->has_y = !(c->loss_rate > 0.0 && u01(&sim->rng) < c->loss_rate);
     o->held = hstpf_sim_held(&c->truth, sim->v, o->u, g);
     /* drawn on every step, so the stream does not depend on the stops */

@@ -1,0 +1,50 @@
+"""tools/figures/results_tables.py's issue 13 tables on a synthetic
+hstpf-mc output whose counts are known."""
+import importlib.util
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+spec = importlib.util.spec_from_file_location("results_tables", ROOT / "tools" / "figures" / "results_tables.py")
+rt = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(rt)
+
+TOTAL = ("total: 6 runs, success 66.7%, false declarations 3 (50.0%), W(v) error > 5% in 1 (16.7%), "
+         "worst truth's mean W(v) error 4.25%, position RMS 0.051 m, speed RMS 0.0280 m/s")
+
+
+def write(d: Path, scenario: str, tag: str) -> None:
+    # CRH2: two runs declare CRH3; CRH3: one declares CRH2; successes cross at 100, 200, 300, 400 s;
+    # at the end CRH2's run 2 declares CRH3 and CRH3's run 3 CRH5 (synthetic: that column reads only
+    # final_declared), the others the truth or nothing
+    runs = {"CRH2": [(1, 100.0, 1, "CRH3", "CRH2"), (0, -1.0, 1, "CRH3", "CRH3"), (1, 200.0, 0, "", "")],
+            "CRH3": [(1, 300.0, 0, "", "CRH3"), (1, 400.0, 1, "CRH2", "CRH3"), (0, -1.0, 0, "", "CRH5")]}
+    js = {"scenario": scenario, "results": [
+        {"truth": t, "runs": [{"seed": i + 1, "success": s, "t_cross": x, "false_decl": f, "false_model": m,
+                               "final_declared": e, "pos_rms": 0.1 * (i + 1), "spd_rms": 0.01}
+                              for i, (s, x, f, m, e) in enumerate(rr)]}
+        for t, rr in runs.items()]}
+    (d / f"{scenario}-{tag}.json").write_text(json.dumps(js))
+    (d / f"{scenario}-{tag}.txt").write_text("scenario ...\ntruth ...\n" + TOTAL + "\n")
+
+
+def test_issue13_row(tmp_path):
+    write(tmp_path, "heavy-t", "grid")
+    table = rt.issue13(tmp_path, "heavy-t").splitlines()
+    assert len(table) == 3  # header, rule, the one engine present
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells[0].startswith("grid")
+    assert cells[1:4] == ["6", "66.7%", "200"]  # the lower median of 100, 200, 300, 400
+    assert cells[4] == "3 (50.0%)"
+    assert cells[5] == "CRH2 -> CRH3 (2); CRH3 -> CRH2 (1)"
+    assert cells[6] == "2"  # ending on CRH3 (truth CRH2) and on CRH5 (truth CRH3)
+    # position RMS: sqrt(mean(0.1^2, 0.2^2, 0.3^2)) over both truths = sqrt(0.14 / 3)
+    assert cells[7:] == ["1 (16.7%)", "4.25%", "0.216", "0.0100"]
+
+
+def test_issue13_only_prints_present_scenarios(tmp_path, capsys):
+    write(tmp_path, "all17-case2", "particle256")
+    assert rt.main(["--dir", str(tmp_path), "--issue13-only"]) == 0
+    out = capsys.readouterr().out
+    assert "### `all17-case2`" in out and "M = 256" in out
+    assert "heavy-t" not in out and "Journeys" not in out
