@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 JOURNEYS = ["stops", "day", "start300", "clock+30", "clock-30", "outage", "gain5"]
-OFFTABLE = ["off10", "off15", "off20", "grade8"]
+OFFTABLE = ["off10", "off15", "off20", "grade8", "mass10", "mass20", "absent", "gain-5", "gain5"]
 
 
 def last(path: Path, prefix: str) -> str:
@@ -54,11 +54,41 @@ def offtable(d: Path) -> str:
            "'no type fits' at the end | runs with a type declared |", "|---|---|---|---|---|---|"]
     for s in OFFTABLE:
         for f, label in ((d / f"{s}.txt", "on (default)"), (d / f"{s}-norefine.txt", "off")):
+            if not f.exists():
+                continue
             t = last(f, "trains off the table:")
             out.append("| `{}` | {} | {} / {} | {} | {} | {} |".format(
                 s, label, num(r"median ([\d.]+%)", t), num(r"p90 ([\d.]+%)", t),
                 num(r"covers the truth in ([\d.]+%)", t), num(r"fits' at the end in ([\d.]+%)", t),
                 num(r"a type declared in ([\d.]+%)", t)))
+    return "\n".join(out)
+
+
+def prior(d: Path) -> str:
+    """The continuous hypothesis's prior weight: Case 1's decision against
+    off-table declarations (the default 0.01 is the scenarios' own run)."""
+    out = ["| `refine_prior_q` | Case 1 decision x_med / p90 / max [s] | off15: a type declared | "
+           "grade8: a type declared |", "|---|---|---|---|"]
+    rows = [("0.01 (default)", "paper1.txt", "off15.txt", "grade8.txt")]
+    rows += [(q, f"paper1-prior{q}.txt", f"off15-prior{q}.txt", f"grade8-prior{q}.txt") for q in ("0.003", "0.001")]
+    for label, p1, o15, g8 in rows:
+        if not all((d / f).exists() for f in (p1, o15, g8)):
+            continue
+        hdr = last(d / p1, "truth ")
+        row = last(d / p1, "CRH3 ")
+        cols = dict(zip(hdr.split()[1:], row.split()[1:]))
+        out.append("| {} | {} / {} / {} | {} | {} |".format(
+            label, cols["x_med"], cols["x_p90"], cols["x_max"],
+            num(r"a type declared in ([\d.]+%)", last(d / o15, "trains off the table:")),
+            num(r"a type declared in ([\d.]+%)", last(d / g8, "trains off the table:"))))
+    f = d / "paper1-norefine.txt"
+    if f.exists():
+        hdr = "truth success x_med x_p90 x_max".split()
+        line = f.read_text().strip().splitlines()[-1].split()
+        out.append("| off (`--no-refine`) | {} / {} / {} | {} | {} |".format(
+            line[2], line[3], line[4],
+            num(r"a type declared in ([\d.]+%)", last(d / "off15-norefine.txt", "trains off the table:")),
+            num(r"a type declared in ([\d.]+%)", last(d / "grade8-norefine.txt", "trains off the table:"))))
     return "\n".join(out)
 
 
@@ -159,6 +189,8 @@ def main(argv=None) -> int:
         print(journeys(d))
         print("\n### Trains not on Table 1\n")
         print(offtable(d))
+        print("\n### The continuous hypothesis's prior weight\n")
+        print(prior(d))
     for sc, title in ISSUE13.items():
         if any((d / f"{sc}-{tag}.txt").exists() for tag, _ in ENGINES):
             print(f"\n### `{sc}`: {title}\n")
