@@ -10,7 +10,7 @@
  *
  * Sources (lib/src): bank.c (life cycle, step, model weights, declaration,
  * blend), engine.h (the interface every engine implements),
- * engine_kalman.c, engine_grid.c, engine_particle.c, config.c (defaults and the one table
+ * engine_kalman.c, engine_grid.c (and grid_*.c), engine_particle.c, config.c (defaults and the one table
  * of ranges), track.c (gradient and curve profile), dist.c, rng.c.
  *
  * Model, per step of length T seconds (units: docs/model.md):
