@@ -105,6 +105,28 @@ static real mass_of(const hstpf_t *f, uint16_t l)
     }
     return t;
 }
+/* Whether model l holds any mass (the sum of non-negative cells is > 0;
+ * four partial sums: only the sign is used). */
+static int has_mass(const hstpf_t *f, uint16_t l)
+{
+    const real *p = f->grid.p[l], *rest = f->grid.rest[l];
+    real t0 = 0, t1 = 0, t2 = 0, t3 = 0;
+    int i;
+    for (i = 0; i + 3 < NS * NV; i += 4) {
+        t0 += p[i];
+        t1 += p[i + 1];
+        t2 += p[i + 2];
+        t3 += p[i + 3];
+    }
+    for (; i < NS * NV; ++i) {
+        t0 += p[i];
+    }
+    for (i = 0; i < NS; ++i) {
+        t1 += rest[i];
+    }
+    return (t0 + t1) + (t2 + t3) > (real)0;
+}
+
 
 /* Predict (and measure) one model with the box tail f->grid.tail. */
 static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
@@ -164,7 +186,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     }
     f->grid.tail = GRID_TAIL;
     model_pass(f, m, st, acc);
-    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !(mass_of(f, l) > (real)0))) {
+    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !has_mass(f, l))) {
         memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
         memcpy(f->grid.rest[l], f->grid.save + NS * NV, sizeof f->grid.rest[l]);
         memcpy(f->grid.geom[l], f->grid.save + NS * NV + NS, sizeof f->grid.geom[l]);
@@ -173,7 +195,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         f->grid.tail = WIDE_TAIL;
         model_pass(f, m, st, acc);
     }
-    if (!(mass_of(f, l) > (real)0)) {
+    if (!has_mass(f, l)) {
         hstpf__acq_t q;
         memset(&q, 0, sizeof q);
         q.y2 = st->has_y ? st->yr : (double)m->s_mean;

@@ -32,6 +32,8 @@ static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt
 
 /* ---- grid_cdf.c: a built distribution over intervals ------------------ */
 
+/* P(X <= x) into *lo and P(X > x) into *hi, each on its own side. */
+void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi);
 /* P(a < X <= b), a <= b, from the quantile tables (the sampler's CDF). */
 real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b);
 /* The quantile at KERN_TAIL (upper = 0) or 1 - KERN_TAIL. */

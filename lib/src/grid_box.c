@@ -18,18 +18,19 @@ static real bin_width(real x0, real x1, real h0, real r, int nmax)
 
 /* The cut_lo and 1 - cut_hi quantiles of a histogram (bins of width h from x0, n bins)
  * convolved with the noise scale * X: the support of a predicted marginal. */
-static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
-                            real cut_hi, real *k, real *lo, real *hi)
+static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
+                           real cut_hi, real *k, int *m0_out, real *lo, real *hi)
 {
     int m0, nk, b, kk;
     real c = 0;
     nk = hstpf__grid_kernel(d, scale, h, HSTPF__GRID_K, k, &m0);
+    *m0_out = m0;
     /* output bin b (0 .. n + nk - 2) holds sum_kk k[kk] hist[b - kk] and
      * covers x0 + (b + m0) h .. + h */
     for (b = 0; b < n + nk - 1; ++b) {
         real o = 0;
-        for (kk = 0; kk < nk; ++kk) {
-            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
         }
         c += o;
         if (c > cut_lo) {
@@ -40,8 +41,8 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
     c = 0;
     for (b = n + nk - 2; b >= 0; --b) {
         real o = 0;
-        for (kk = 0; kk < nk; ++kk) {
-            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
         }
         c += o;
         if (c > cut_hi) {
@@ -52,6 +53,7 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
     if (*hi <= *lo) {
         *hi = *lo + h;
     }
+    return nk;
 }
 
 /* With a measurement, the position box only needs to hold the posterior:
@@ -63,20 +65,19 @@ static void noisy_quantiles(const real *hist, int n, real x0, real h, const hstp
  * prediction, whose width is the Gamma(0.02) noise's rare long jumps).
  * Nothing changes when the measurement misses the prediction (the retry
  * and the reach to the measurement handle that). */
-static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, real scale, real yr, real *s_lo,
-                          real *s_hi)
+static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, const real *k, int nk, int m0, real yr,
+                          real *s_lo, real *s_hi)
 {
-    real *out = f->grid.work + NS * NV / 2, *k = f->grid.ks;
+    real *out = f->grid.work + NS * NV / 2;
     const real lfloor = hstpf__exp_neg(f->de.floor - f->de.lp_max);
     real sum = 0, cut, c;
-    int m0, nk, b, kk, nb, bl, bh;
-    nk = hstpf__grid_kernel(&f->ds, scale, h, HSTPF__GRID_K, k, &m0);
+    int b, kk, nb, bl, bh;
     nb = n + nk - 1;
     for (b = 0; b < nb; ++b) { /* bin b covers x0 + (b + m0) h .. + h */
         const real x = x0 + (real)(b + m0) * h;
         real o = 0, lik;
-        for (kk = 0; kk < nk; ++kk) {
-            o += (b - kk >= 0 && b - kk < n) ? k[kk] * hist[b - kk] : (real)0;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
         }
         lik = o > (real)0 ? hstpf__grid_cell_loglik(&f->de, yr - (x + h), yr - x) - f->de.lp_max : (real)-3e38;
         lik = lik > (real)-80 ? hstpf__exp_neg(lik < (real)0 ? lik : (real)0) : (real)0;
@@ -150,9 +151,9 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
                 pull = -1;
             }
         }
-        noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, s_lo, s_hi);
-        if (has_y && f->grid.tail > WIDE_TAIL) {
-            posterior_box(f, hist, n, x0, h, scale, yr, s_lo, s_hi);
+        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi);
+        if (has_y && f->grid.tail > WIDE_TAIL) { /* the same kernel as the predicted box's */
+            posterior_box(f, hist, n, x0, h, f->grid.ks, nk, m0, yr, s_lo, s_hi);
         }
     }
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
@@ -196,8 +197,8 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         hist[b] += rm;
     }
     /* the pull moves the speed the same way (through the s-v correlation) */
-    noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
-                    (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, v_lo, v_hi);
+    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
+                          (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi);
 }
 
 /* Step 1: the new box from the transported support plus the noise

@@ -38,7 +38,7 @@ static real tail_prob(const real *tab, real x, int dir)
 /* P(X <= x) into *lo and P(X > x) into *hi, each computed on its own side
  * so that neither loses the small tail to round-off. Consistent with the
  * sampler: the exact probability at every quantile node, linear between. */
-static void cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
+void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
 {
     int a = 1, b = QN - 1;
     real u;
@@ -69,8 +69,8 @@ static void cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
 real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b)
 {
     real la, ha, lb, hb, p;
-    cdf2(d, a, &la, &ha);
-    cdf2(d, b, &lb, &hb);
+    hstpf__grid_cdf2(d, a, &la, &ha);
+    hstpf__grid_cdf2(d, b, &lb, &hb);
     p = ha < (real)0.5 ? ha - hb : lb - la;
     return p > (real)0 ? p : (real)0;
 }

@@ -14,17 +14,28 @@ int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, rea
     const real lo = scale * hstpf__grid_tail_quantile(d, 0) / h, hi = scale * hstpf__grid_tail_quantile(d, 1) / h;
     const int cap = (HSTPF__GRID_K - 1) / 2;
     int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
-    real sum = 0, total;
+    real sum = 0, total, el, eh;
     reach = reach < cap ? reach : cap;
     total = scale > (real)0 ? hstpf__grid_prob_in(d, ((real)a - (real)0.5) * h / scale, ((real)b + (real)0.5) * h / scale)
                             : (real)0;
     a = a < -reach ? -reach : (a > reach ? reach : a);
     b = b > reach ? reach : (b < -reach ? -reach : b);
     n = b - a + 1;
-    for (m = 0; m < n; ++m) {
-        const real c = (real)(a + m);
-        k[m] = scale > (real)0 ? hstpf__grid_prob_in(d, (c - (real)0.5) * h / scale, (c + (real)0.5) * h / scale) : (real)0;
-        sum += k[m];
+    if (scale > (real)0) { /* each edge's CDF once: tap m's upper edge is tap m + 1's lower */
+        hstpf__grid_cdf2(d, ((real)a - (real)0.5) * h / scale, &el, &eh);
+        for (m = 0; m < n; ++m) {
+            real ul, uh, p;
+            hstpf__grid_cdf2(d, ((real)(a + m) + (real)0.5) * h / scale, &ul, &uh);
+            p = eh < (real)0.5 ? eh - uh : ul - el; /* as hstpf__grid_prob_in */
+            k[m] = p > (real)0 ? p : (real)0;
+            sum += k[m];
+            el = ul;
+            eh = uh;
+        }
+    } else {
+        for (m = 0; m < n; ++m) {
+            k[m] = 0;
+        }
     }
     if (!(sum > (real)0) || !(total > (real)0)) { /* no spread at this scale: a point mass at offset 0 */
         const int z = a > 0 ? 0 : (b < 0 ? n - 1 : -a);
@@ -40,26 +51,29 @@ int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, rea
     return n;
 }
 
-/* Step 3: speed noise from work into p, then position noise in place; only
- * the rows and columns that can receive mass are visited. */
-/* Position noise on one row, in place over [c0, c1] -> [o0, o1]. */
-static void conv_row(real *o, real *row, int c0, int c1, const real *ks, int nks, int m0s)
+/* Position noise on one row, in place over [c0, c1] -> [o0, o1]: o[i] =
+ * sum_k ks[k] x[i - m0s - k] over every tap, with x the input padded with
+ * zeros (pad: scratch of (c1 - c0 + 1) + 2 (nks - 1) values). The padding's
+ * terms add exact zeros, so the sum is that of the taps that reach, in the
+ * same order, and the loop over i vectorises. */
+static void conv_row(real *o, real *pad, int c0, int c1, const real *ks, int nks, int m0s)
 {
     const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
+    real *x = pad + (nks - 1) - c0; /* x[t] for t in [c0 - nks + 1, c1 + nks - 1] */
     int i, k;
+    for (i = 0; i < (c1 - c0 + 1) + 2 * (nks - 1); ++i) {
+        pad[i] = 0;
+    }
     for (i = c0; i <= c1; ++i) {
-        row[i] = o[i];
+        x[i] = o[i];
         o[i] = 0;
     }
-    for (i = o0; i <= o1; ++i) { /* gather: cell i from i - m0s - k */
-        const int ka = i - m0s - c1 > 0 ? i - m0s - c1 : 0;
-        const int kb = i - m0s - c0 < nks - 1 ? i - m0s - c0 : nks - 1;
-        const real *src = row + (i - m0s);
-        real acc = 0;
-        for (k = ka; k <= kb; ++k) {
-            acc += ks[k] * src[-k];
+    for (k = 0; k < nks; ++k) {
+        const real c = ks[k];
+        const real *src = x - m0s - k;
+        for (i = o0; i <= o1; ++i) {
+            o[i] += c * src[i];
         }
-        o[i] = acc;
     }
 }
 
@@ -69,7 +83,7 @@ static void conv_row(real *o, real *row, int c0, int c1, const real *ks, int nks
  * the rows and columns that can receive mass are visited. */
 void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
 {
-    real *p = f->grid.p[l], *w = f->grid.work, *row = f->grid.row, *kv = f->grid.kv, *ks = f->grid.ks;
+    real *p = f->grid.p[l], *w = f->grid.work, *kv = f->grid.kv, *ks = f->grid.ks;
     real *rest = f->grid.rest[l], *rpend = f->grid.rpend;
     int16_t *box = f->grid.box;
     int m0v, m0s, nkv, nks, j, k, i, r0 = 0, r1 = -1, c0 = 0, c1 = -1;
@@ -113,11 +127,11 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
             }
         }
     }
-    if (!(nks == 1 && m0s == 0)) {
+    if (!(nks == 1 && m0s == 0)) { /* work is free now: the padded rows */
         for (j = r0; j <= r1; ++j) {
-            conv_row(p + j * NS, row, c0, c1, ks, nks, m0s);
+            conv_row(p + j * NS, w, c0, c1, ks, nks, m0s);
         }
-        conv_row(rpend, row, 0, NS - 1, ks, nks, m0s);
+        conv_row(rpend, w, 0, NS - 1, ks, nks, m0s);
     }
     for (i = 0; i < NS; ++i) {
         rest[i] = f->grid.rnew[i] + rpend[i];
