@@ -42,9 +42,8 @@ real hstpf__grid_marginals(hstpf_t *f, const real *p, const real *rest)
     }
     for (j = 0; j < NV; ++j) {
         const real *r = p + j * NS;
-        real rs = 0;
+        const real rs = hstpf__grid_sum(r, NS);
         for (i = 0; i < NS; ++i) {
-            rs += r[i];
             f->grid.ms[i] += r[i];
         }
         f->grid.mv[j] = rs;
@@ -71,8 +70,18 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
         v2 += w * x * x;
         moving += w;
     }
-    for (i = 0; i < NS * NV; ++i) {
-        q2 += (double)p[i] * (double)p[i];
+    {
+        double qa[4] = {0.0, 0.0, 0.0, 0.0};
+        for (i = 0; i + 4 <= NS * NV; i += 4) {
+            int k;
+            for (k = 0; k < 4; ++k) {
+                qa[k] += (double)p[i + k] * (double)p[i + k];
+            }
+        }
+        for (; i < NS * NV; ++i) {
+            qa[0] += (double)p[i] * (double)p[i];
+        }
+        q2 = (qa[0] + qa[1]) + (qa[2] + qa[3]);
     }
     for (i = 0; i < NS; ++i) {
         q2 += (double)rest[i] * (double)rest[i];
@@ -95,15 +104,7 @@ static void place_all(hstpf_t *f, const hstpf__acq_t *q)
 
 static real mass_of(const hstpf_t *f, uint16_t l)
 {
-    real t = 0;
-    int i;
-    for (i = 0; i < NS * NV; ++i) {
-        t += f->grid.p[l][i];
-    }
-    for (i = 0; i < NS; ++i) {
-        t += f->grid.rest[l][i];
-    }
-    return t;
+    return hstpf__grid_sum(f->grid.p[l], NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS);
 }
 /* Whether model l holds any mass (the sum of non-negative cells is > 0;
  * four partial sums: only the sign is used). */

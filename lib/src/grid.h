@@ -30,6 +30,24 @@ static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt
     return v + dt * (acc - m->k0 - (m->k1 + m->k2 * v) * v);
 }
 
+/* x[0] + ... + x[n - 1] in eight partial sums: the grid's sums run over
+ * thousands of cells, and one chain of dependent additions would cost the
+ * adder's latency per cell. */
+static inline real hstpf__grid_sum(const real *x, int n)
+{
+    real a[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    int i, k;
+    for (i = 0; i + 8 <= n; i += 8) {
+        for (k = 0; k < 8; ++k) {
+            a[k] += x[i + k];
+        }
+    }
+    for (; i < n; ++i) {
+        a[0] += x[i];
+    }
+    return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
+}
+
 /* ---- grid_cdf.c: a built distribution over intervals ------------------ */
 
 /* P(X <= x) into *lo and P(X > x) into *hi, each on its own side. */

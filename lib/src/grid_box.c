@@ -165,14 +165,11 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     }
     memset(hist, 0, (size_t)n * sizeof *hist);
     for (j = 0; j < NV; ++j) {
-        real ta, tb, rm = 0;
-        int i;
+        real ta, tb, rm;
         if (f->grid.first[j] > f->grid.last[j]) {
             continue;
         }
-        for (i = f->grid.first[j]; i <= f->grid.last[j]; ++i) {
-            rm += p[j * NS + i];
-        }
+        rm = hstpf__grid_sum(p + j * NS + f->grid.first[j], f->grid.last[j] - f->grid.first[j] + 1);
         ta = ((f->grid.vimg[j] > (real)0 ? f->grid.vimg[j] : (real)0) - x0) / h;
         tb = ((f->grid.vimg[j + 1] > (real)0 ? f->grid.vimg[j + 1] : (real)0) - x0) / h;
         if (ta > tb) {
@@ -220,12 +217,8 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     const real a0 = acc - m->k0;                                   /* net acceleration at rest */
     const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1;         /* < 0: the rest mass is held */
     int i, j, any = 0;
-    for (i = 0; i < NS * NV; ++i) {
-        tot += p[i];
-    }
-    for (i = 0; i < NS; ++i) {
-        rtot += rest[i];
-    }
+    tot = hstpf__grid_sum(p, NS * NV);
+    rtot = hstpf__grid_sum(rest, NS);
     tot += rtot;
     thr = KERN_TAIL * tot / (real)(NS * NV);
     for (j = 0; j < NV; ++j) {

@@ -52,13 +52,17 @@ void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
         *lo = (real)1 - *hi;
         return;
     }
-    while (b - a > 1) { /* q[a] <= x < q[b] */
-        const int c = (a + b) / 2;
-        if (x >= d->q[c]) {
-            a = c;
-        } else {
-            b = c;
+    { /* the last a in [1, QN - 2] with q[a] <= x (q[1] <= x < q[QN - 1]); no
+       * branch on the comparison */
+        const real *base = d->q + 1;
+        int len = QN - 2;
+        while (len > 1) {
+            const int half = len / 2;
+            base = base[half] <= x ? base + half : base;
+            len -= half;
         }
+        a = (int)(base - d->q);
+        b = a + 1;
     }
     u = d->q[b] > d->q[a] ? (x - d->q[a]) / (d->q[b] - d->q[a]) : (real)0;
     *lo = ((real)a + u) / (real)QN;

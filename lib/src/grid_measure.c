@@ -40,9 +40,9 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
         real *r = p + j * NS;
         for (i = 0; i < NS; ++i) {
             r[i] *= ll[i];
-            sum += r[i];
         }
     }
+    sum = hstpf__grid_sum(p, NS * NV);
     for (i = 0; i < NS; ++i) {
         f->grid.rest[l][i] *= ll[i];
         sum += f->grid.rest[l][i];

@@ -22,7 +22,12 @@ void hstpf__grid_remap(const real *in, int i0, int i1, real a, real w, real *out
         }
         k = (int32_t)x0;
         k -= (real)k > x0 ? 1 : 0; /* floor */
-        if (x1 <= (real)(k + 1)) { /* inside one output cell */
+        if (w <= (real)1 && k >= 0 && k + 1 < n_out) { /* one or two cells, without a branch on which */
+            real fr = ((real)(k + 1) - x0) * inv;
+            fr = fr < (real)1 ? fr : (real)1;
+            out[k] += m * fr;
+            out[k + 1] += m - m * fr;
+        } else if (x1 <= (real)(k + 1)) { /* inside one output cell */
             out[k] += m;
         } else if (w <= (real)1 || x1 <= (real)(k + 2)) { /* across one edge */
             const real fr = ((real)(k + 1) - x0) * inv;
