@@ -70,21 +70,16 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
         v2 += w * x * x;
         moving += w;
     }
-    {
-        double qa[4] = {0.0, 0.0, 0.0, 0.0};
-        for (i = 0; i + 4 <= NS * NV; i += 4) {
-            int k;
-            for (k = 0; k < 4; ++k) {
-                qa[k] += (double)p[i + k] * (double)p[i + k];
-            }
+    { /* sum of squares in float, eight partial sums: a double per cell is
+       * soft-float on the M4F (a quarter of its grid step) */
+        real qa[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+        for (i = 0; i < NS * NV; ++i) {
+            qa[i & 7] += p[i] * p[i];
         }
-        for (; i < NS * NV; ++i) {
-            qa[0] += (double)p[i] * (double)p[i];
+        for (i = 0; i < NS; ++i) {
+            qa[i & 7] += rest[i] * rest[i];
         }
-        q2 = (qa[0] + qa[1]) + (qa[2] + qa[3]);
-    }
-    for (i = 0; i < NS; ++i) {
-        q2 += (double)rest[i] * (double)rest[i];
+        q2 = (double)(((qa[0] + qa[1]) + (qa[2] + qa[3])) + ((qa[4] + qa[5]) + (qa[6] + qa[7])));
     }
     m->s_mean = (real)s1;
     m->v_mean = (real)v1;
@@ -111,21 +106,7 @@ static real mass_of(const hstpf_t *f, uint16_t l)
 static int has_mass(const hstpf_t *f, uint16_t l)
 {
     const real *p = f->grid.p[l], *rest = f->grid.rest[l];
-    real t0 = 0, t1 = 0, t2 = 0, t3 = 0;
-    int i;
-    for (i = 0; i + 3 < NS * NV; i += 4) {
-        t0 += p[i];
-        t1 += p[i + 1];
-        t2 += p[i + 2];
-        t3 += p[i + 3];
-    }
-    for (; i < NS * NV; ++i) {
-        t0 += p[i];
-    }
-    for (i = 0; i < NS; ++i) {
-        t1 += rest[i];
-    }
-    return (t0 + t1) + (t2 + t3) > (real)0;
+    return hstpf__grid_sum(p, NS * NV) + hstpf__grid_sum(rest, NS) > (real)0;
 }
 
 

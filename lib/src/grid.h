@@ -36,14 +36,9 @@ static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt
 static inline real hstpf__grid_sum(const real *x, int n)
 {
     real a[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    int i, k;
-    for (i = 0; i + 8 <= n; i += 8) {
-        for (k = 0; k < 8; ++k) {
-            a[k] += x[i + k];
-        }
-    }
-    for (; i < n; ++i) {
-        a[0] += x[i];
+    int i;
+    for (i = 0; i < n; ++i) {
+        a[i & 7] += x[i];
     }
     return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
 }

@@ -9,10 +9,11 @@
 
 /* ---- CDF of a built distribution, from its quantile tables ----------- */
 
-/* 2^(k-32) for k in [0, 32] */
+/* 2^(k-32) for k in [0, 31], exactly, without double arithmetic (soft-float
+ * on the M4F) */
 static real pow2m32(int k)
 {
-    return (real)ldexp(1.0, k - 32);
+    return (real)((uint32_t)1u << k) * (real)(1.0 / 4294967296.0);
 }
 
 /* Tail probability at x between the nodes of a tail table (nodes at tail
