@@ -1,7 +1,7 @@
 /* hstpf-bench: time hstpf_step() on the host, one thread.
  *
- * The paper's Case 1 (simulator: CRH3, paper profile, Case 1 noise, seed 1)
- * is simulated first into an array of inputs; then, for each configuration
+ * The paper's Case 1 (simulator: CRH3, paper profile, Case 1 noise, seed 1;
+ * --case 2: Case 2's Gamma noise, the filter told the same) is simulated first into an array of inputs; then, for each configuration
  * (models x particles), every run initialises the instance (not timed) and
  * times only the loop of hstpf_step() calls over the whole trajectory with
  * clock_gettime(CLOCK_MONOTONIC), repeating the trajectory until the run has
@@ -14,8 +14,8 @@
  * Configurations MxN run the particle engine; MxK runs the Kalman engine
  * (one EKF per model) and MxG the grid engine (HSTPF_GRID_NS x
  * HSTPF_GRID_NV cells per model), both reported per model-step instead.
- * The grid rows run on the same Gaussian inputs (its cost does not depend
- * on the noise's kind, only on the kernels' width in cells).
+ * The grid's cost depends on the kernels' width in cells, so on the noise:
+ * Case 2's one-sided noises have kernels as wide as the grid (--case 2).
  *
  * Models: 3 = the paper's Case 1 set {SS1/SS3/SS4, CRH3, SS8}; otherwise the
  * first M rows of Table 1 (17 = all of them). Not a test: ctest does not run
@@ -92,7 +92,8 @@ static double median(const double *x, unsigned n)
 static void usage(void)
 {
     fprintf(stderr,
-            "usage: hstpf-bench [--json] [--runs N] [--steps N] [--min-time S] [--config MxN]... [--version]\n"
+            "usage: hstpf-bench [--json] [--case 1|2] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
+            "  [--version]\n"
             "  MxN: M models, N particles; MxK: M models, Kalman engine; MxG: grid engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
             "           --config 3xK --config 17xK --config 3xG --config 17xG\n");
@@ -160,7 +161,7 @@ int main(int argc, char **argv)
     result_t res[MAX_CONFIGS];
     unsigned n_cfg = 0, runs = 9, steps = 1801, i, k;
     double min_time = 0.3;
-    int json = 0;
+    int json = 0, noise_case = 1;
     hstpf_input_t *in;
     hstpf_sim_config_t sc;
     hstpf_sim_t sim;
@@ -174,6 +175,12 @@ int main(int argc, char **argv)
         } else if (strcmp(a, "--version") == 0) {
             printf("hstpf-bench %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
             return 0;
+        } else if (i + 1 < (unsigned)argc && strcmp(a, "--case") == 0) {
+            noise_case = atoi(argv[++i]);
+            if (noise_case != 1 && noise_case != 2) {
+                usage();
+                return 2;
+            }
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--runs") == 0) {
             runs = (unsigned)strtoul(argv[++i], NULL, 10);
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--steps") == 0) {
@@ -237,6 +244,9 @@ int main(int argc, char **argv)
         return 1;
     }
     hstpf_sim_default(&sc);
+    if (noise_case == 2) {
+        hstpf_sim_case2(&sc);
+    }
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k < steps; ++k) {
         hstpf_sim_next_input(&sim, &smp, &in[k]);
@@ -287,6 +297,7 @@ int main(int argc, char **argv)
                COMPILER, HSTPF_BENCH_BUILD_TYPE, HSTPF_BENCH_FLAGS);
         printf("  \"library\": \"%s\",\n  \"capacity\": {\"models\": %d, \"particles\": %d},\n",
                HSTPF_BENCH_LIB, HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES);
+        printf("  \"case\": %d,\n", noise_case);
         printf("  \"real\": \"%s\",\n  \"steps\": %u,\n  \"runs\": %u,\n  \"min_time_s\": %g,\n",
                sizeof(hstpf_real_t) == 4 ? "float" : "double", steps, runs, min_time);
         printf("  \"target_ns_per_particle_step\": %g,\n  \"results\": [", TARGET_NS);
@@ -322,7 +333,7 @@ int main(int argc, char **argv)
         return 0;
     }
 
-    printf("hstpf-bench: hstpf_step() on the paper's Case 1 inputs (%u steps), one thread\n", steps);
+    printf("hstpf-bench: hstpf_step() on the paper's Case %d inputs (%u steps), one thread\n", noise_case, steps);
     printf("compiler: %s; build %s; flags: %s\n", COMPILER, HSTPF_BENCH_BUILD_TYPE,
            HSTPF_BENCH_FLAGS);
     printf("library: %s (HSTPF_MAX_MODELS %d, HSTPF_MAX_PARTICLES %d, %s)\n", HSTPF_BENCH_LIB,

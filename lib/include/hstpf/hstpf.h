@@ -12,7 +12,7 @@
  * lock.c (acquisition and re-acquisition), declare.c (the declaration state
  * machine, "no type fits"), estimate.c (the published blend, its sd and
  * validity), engine.h (the interface every engine implements),
- * engine_kalman.c, engine_grid.c, engine_particle.c, refine.c (the
+ * engine_kalman.c, engine_grid.c (and grid_*.c), engine_particle.c, refine.c (the
  * continuous-theta hypothesis), config.c (defaults and the one table of
  * ranges), track.c (gradient and curve profile), dist.c (noise tables;
  * dist_blur.c the measurement blur, dist_tables.c constants), rng.c.

@@ -1,0 +1,101 @@
+/* The grid engine's internal interface, shared by engine_grid.c and the
+ * grid_*.c files (one file per step of docs/grid.md). Not part of the API.
+ * The memory is hstpf_t.grid (hstpf_grid_ws_t in hstpf.h); f->grid.work,
+ * row, ms, mv, ks, kv, vimg, first, last and box are scratch passed from
+ * one step to the next within one model's pass. */
+#ifndef HSTPF_GRID_H
+#define HSTPF_GRID_H
+
+#include "dist_impl.h"
+#include "engine.h"
+#include "internal.h"
+
+typedef hstpf_real_t real;
+
+#define NS HSTPF_GRID_NS
+#define NV HSTPF_GRID_NV
+#define QN ((int)HSTPF_DIST_QN)
+#define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
+#define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
+#define PULL_SD 2.0            /* measurement beyond this many sd: keep that tail */
+#define KERN_TAIL ((real)1e-7)  /* extent of the noise kernels and the prior */
+#define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
+#define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
+#define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
+
+/* The deterministic speed after one step (below 0: the train comes to
+ * rest within the step; the caller moves that mass to rest). */
+static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt, real acc)
+{
+    return v + dt * (acc - m->k0 - (m->k1 + m->k2 * v) * v);
+}
+
+/* x[0] + ... + x[n - 1] in eight partial sums: the grid's sums run over
+ * thousands of cells, and one chain of dependent additions would cost the
+ * adder's latency per cell. */
+static inline real hstpf__grid_sum(const real *x, int n)
+{
+    real a[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    int i;
+    for (i = 0; i < n; ++i) {
+        a[i & 7] += x[i];
+    }
+    return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
+}
+
+/* ---- grid_cdf.c: a built distribution over intervals ------------------ */
+
+/* P(X <= x) into *lo and P(X > x) into *hi, each on its own side. */
+void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi);
+/* P(a < X <= b), a <= b, from the quantile tables (the sampler's CDF). */
+real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b);
+/* The quantile at KERN_TAIL (upper = 0) or 1 - KERN_TAIL. */
+real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper);
+/* Log of the mean density of d over [a, b], a < b; -3e38 for zero. */
+real hstpf__grid_cell_loglik(const hstpf_dist_t *d, real a, real b);
+
+/* ---- grid_acquire.c ---------------------------------------------------- */
+
+/* Model m's cells placed from the acquisition fixes q. */
+void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
+
+/* ---- grid_box.c: step 1 ------------------------------------------------ */
+
+/* The new grid ng = (s0, ds, v0, dv) of model l for this step (with the
+ * box tail f->grid.tail); sets f->grid.first/last and vimg. *tot and *rtot:
+ * the model's mass and its mass at rest. Uses f->grid.work as scratch. */
+void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y,
+                         real yr, real *ng, real *tot, real *rtot);
+
+/* ---- grid_transport.c: step 2 ------------------------------------------ */
+
+/* Input cells i0..i1, cell i covering [a + i w, a + (i + 1) w] in output
+ * cells, added to out[0..n_out) in proportion to the overlap. */
+void hstpf__grid_remap(const real *in, int i0, int i1, real a, real w, real *out, int n_out);
+/* Model l's cells moved by the dynamics onto ng, into f->grid.work (and
+ * rnew, rpend, box). Returns the fraction of the mass at rest after it. */
+real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, const real *ng, real tot,
+                           real rtot);
+
+/* ---- grid_noise.c: step 3 ---------------------------------------------- */
+
+/* The cell masses of the noise scale * X on cells of width h, within
+ * +-reach cells: k[0..n), first offset *m0; returns n. */
+int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k, int *m0);
+/* The process noise convolved into model l's cells from f->grid.work. */
+void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng);
+
+/* ---- grid_measure.c: step 4 -------------------------------------------- */
+
+/* Model l weighted by the measurement yr and normalised; returns the
+ * log-likelihood increment and counts the floor hits of m. */
+real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr);
+
+/* ---- engine_grid.c ----------------------------------------------------- */
+
+/* The marginals of cells p and rest into f->grid.ms and mv; the mass. */
+real hstpf__grid_marginals(hstpf_t *f, const real *p, const real *rest);
+/* Model l's means, variances and effective cell count into m. */
+void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l);
+
+#endif

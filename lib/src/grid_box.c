@@ -1,0 +1,298 @@
+/* Grid engine: where each step's new grid goes (step 1 of docs/grid.md):
+ * the box between quantiles of the predicted marginals, the posterior's
+ * box with a measurement, and the reach to a measurement that pulls. */
+#include <math.h>
+#include <string.h>
+
+#include "grid.h"
+
+/* Bins of a histogram on [x0, x1] at spacing at least h0, so that at most
+ * nmax bins and a noise of range r fits the kernel capacity. */
+static real bin_width(real x0, real x1, real h0, real r, int nmax)
+{
+    real h = h0;
+    const real hb = (x1 - x0) / (real)(nmax - 2), hk = r / (real)(HSTPF__GRID_K - 4);
+    h = hb > h ? hb : h;
+    return hk > h ? hk : h;
+}
+
+/* The cut_lo and 1 - cut_hi quantiles of a histogram (bins of width h from x0, n bins)
+ * convolved with the noise scale * X: the support of a predicted marginal. */
+static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
+                           real cut_hi, real *k, int *m0_out, real *lo, real *hi)
+{
+    int m0, nk, b, kk;
+    real c = 0;
+    nk = hstpf__grid_kernel(d, scale, h, HSTPF__GRID_K, k, &m0);
+    *m0_out = m0;
+    /* output bin b (0 .. n + nk - 2) holds sum_kk k[kk] hist[b - kk] and
+     * covers x0 + (b + m0) h .. + h */
+    for (b = 0; b < n + nk - 1; ++b) {
+        real o = 0;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
+        }
+        c += o;
+        if (c > cut_lo) {
+            break;
+        }
+    }
+    *lo = x0 + (real)(b + m0) * h;
+    c = 0;
+    for (b = n + nk - 2; b >= 0; --b) {
+        real o = 0;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
+        }
+        c += o;
+        if (c > cut_hi) {
+            break;
+        }
+    }
+    *hi = x0 + (real)(b + m0 + 1) * h;
+    if (*hi <= *lo) {
+        *hi = *lo + h;
+    }
+    return nk;
+}
+
+/* With a measurement, the position box only needs to hold the posterior:
+ * the predicted position marginal (hist convolved with the noise) times the
+ * measurement density over each bin, cut at GRID_TAIL per side. Predicted
+ * mass left outside then carries at most 2 GRID_TAIL of the likelihood, so
+ * the increment changes by less than 3e-5 nats, while the cells shrink to
+ * the posterior's width (Case 2: centimetres inside a metre-wide
+ * prediction, whose width is the Gamma(0.02) noise's rare long jumps).
+ * Nothing changes when the measurement misses the prediction (the retry
+ * and the reach to the measurement handle that). */
+static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, const real *k, int nk, int m0, real yr,
+                          real *s_lo, real *s_hi)
+{
+    real *out = f->grid.work + NS * NV / 2;
+    const real lfloor = hstpf__exp_neg(f->de.floor - f->de.lp_max);
+    real sum = 0, cut, c;
+    int b, kk, nb, bl, bh;
+    nb = n + nk - 1;
+    for (b = 0; b < nb; ++b) { /* bin b covers x0 + (b + m0) h .. + h */
+        const real x = x0 + (real)(b + m0) * h;
+        real o = 0, lik;
+        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+            o += k[kk] * hist[b - kk];
+        }
+        lik = o > (real)0 ? hstpf__grid_cell_loglik(&f->de, yr - (x + h), yr - x) - f->de.lp_max : (real)-3e38;
+        lik = lik > (real)-80 ? hstpf__exp_neg(lik < (real)0 ? lik : (real)0) : (real)0;
+        out[b] = lik > lfloor ? o * lik : (real)0;
+        sum += out[b];
+    }
+    if (!(sum > (real)0)) {
+        return;
+    }
+    cut = GRID_TAIL * sum;
+    for (bl = 0, c = 0; bl < nb - 1 && c + out[bl] <= cut; ++bl) {
+        c += out[bl];
+    }
+    for (bh = nb - 1, c = 0; bh > bl && c + out[bh] <= cut; --bh) {
+        c += out[bh];
+    }
+    *s_lo = x0 + (real)(bl + m0) * h;
+    *s_hi = x0 + (real)(bh + m0 + 1) * h;
+}
+
+/* The box of the predicted density: the f->grid.tail quantiles of its two
+ * marginals, from the occupied cells (f->grid.first/last, vimg) moved by the
+ * dynamics and convolved with the noise. On entry *s_lo.. hold the bounding
+ * box of the moved cells. Uses f->grid.work as scratch. Quantiles, not mean
+ * +- k sd: a one-sided noise's spike stays inside. */
+static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot, int has_y, real yr, real mid,
+                          real rest_v, real *s_lo, real *s_hi, real *v_lo, real *v_hi)
+{
+    const real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
+    const int nmax = NS * NV / 4;
+    real *hist = f->grid.work;
+    const real rs = scale * (hstpf__grid_tail_quantile(&f->ds, 1) - hstpf__grid_tail_quantile(&f->ds, 0));
+    const real rv = scale * (hstpf__grid_tail_quantile(&f->dv, 1) - hstpf__grid_tail_quantile(&f->dv, 0));
+    real h, x0;
+    int n, j, b, pull = 0;
+    /* positions: each occupied row shifted by T times its centre speed */
+    x0 = *s_lo;
+    h = bin_width(*s_lo, *s_hi, g[1], rs, nmax);
+    {
+        const real nn = (*s_hi - *s_lo) / h; /* NaN-safe: never more than nmax bins */
+        n = nn >= (real)0 && nn < (real)(nmax - 2) ? (int)nn + 2 : nmax;
+    }
+    memset(hist, 0, (size_t)n * sizeof *hist);
+    for (j = 0; j < NV; ++j) {
+        const real sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
+        if (f->grid.first[j] <= f->grid.last[j]) {
+            hstpf__grid_remap(p + j * NS, f->grid.first[j], f->grid.last[j], (g[0] + sh - x0) / h, g[1] / h, hist, n);
+        }
+    }
+    hstpf__grid_remap(rest, 0, NS - 1, (g[0] - x0) / h, g[1] / h, hist, n); /* at rest: no shift */
+    {
+        /* the side the measurement lies on keeps its tail to WIDE_TAIL: a
+         * model the measurements pull away from its prediction has its
+         * posterior there (cutting it would bias every misfit model) */
+        real cut_lo = f->grid.tail * tot, cut_hi = cut_lo;
+        if (has_y) {
+            double m1 = 0.0, m2 = 0.0, sd;
+            for (b = 0; b < n; ++b) {
+                const double x = (double)x0 + ((double)b + 0.5) * (double)h;
+                m1 += (double)hist[b] * x;
+                m2 += (double)hist[b] * x * x;
+            }
+            m1 /= (double)tot;
+            sd = sqrt(fmax(m2 / (double)tot - m1 * m1, 0.0) + (double)(scale * f->ds.sd) * (double)(scale * f->ds.sd));
+            m1 += (double)(scale * f->ds.mean);
+            if ((double)mid > m1 + PULL_SD * sd) {
+                cut_hi = WIDE_TAIL * tot;
+                pull = 1;
+            } else if ((double)mid < m1 - PULL_SD * sd) {
+                cut_lo = WIDE_TAIL * tot;
+                pull = -1;
+            }
+        }
+        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi);
+        if (has_y && f->grid.tail > WIDE_TAIL) { /* the same kernel as the predicted box's */
+            posterior_box(f, hist, n, x0, h, f->grid.ks, nk, m0, yr, s_lo, s_hi);
+        }
+    }
+    /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
+    x0 = *v_lo;
+    h = bin_width(*v_lo, *v_hi, g[3], rv, nmax);
+    {
+        const real nn = (*v_hi - *v_lo) / h;
+        n = nn >= (real)0 && nn < (real)(nmax - 2) ? (int)nn + 2 : nmax;
+    }
+    memset(hist, 0, (size_t)n * sizeof *hist);
+    for (j = 0; j < NV; ++j) {
+        real ta, tb, rm;
+        if (f->grid.first[j] > f->grid.last[j]) {
+            continue;
+        }
+        rm = hstpf__grid_sum(p + j * NS + f->grid.first[j], f->grid.last[j] - f->grid.first[j] + 1);
+        ta = ((f->grid.vimg[j] > (real)0 ? f->grid.vimg[j] : (real)0) - x0) / h;
+        tb = ((f->grid.vimg[j + 1] > (real)0 ? f->grid.vimg[j + 1] : (real)0) - x0) / h;
+        if (ta > tb) {
+            const real t = ta;
+            ta = tb;
+            tb = t;
+        }
+        if (tb - ta < (real)1e-6) {
+            b = ta > (real)0 ? (int32_t)ta : 0;
+            hist[b < n ? b : n - 1] += rm;
+            continue;
+        }
+        hstpf__grid_remap(&rm, 0, 0, ta, tb - ta, hist, n);
+    }
+    if (rest_v >= (real)0) { /* the mass at rest starts moving */
+        real rm = 0;
+        for (j = 0; j < NS; ++j) {
+            rm += rest[j];
+        }
+        b = (int32_t)((rest_v - x0) / h);
+        b = b < 0 ? 0 : (b > n - 1 ? n - 1 : b);
+        hist[b] += rm;
+    }
+    /* the pull moves the speed the same way (through the s-v correlation) */
+    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
+                          (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi);
+}
+
+/* Step 1: the new box from the transported support plus the noise
+ * quantiles, into ng (s0, ds, v0, dv); sets f->grid.first/last (the
+ * occupied cells of each row) and vimg for the transport. A cell is
+ * occupied when it holds more than KERN_TAIL / cells of the mass, so that
+ * at most KERN_TAIL is left behind; the box is the bounding box of the
+ * occupied cells after the dynamics (each row moved by T times its centre
+ * speed), so a correlated posterior does not inflate it. */
+void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y,
+                         real yr, real *ng, real *tot_out, real *rtot_out)
+{
+    const real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
+    real *vimg = f->grid.vimg;
+    int16_t *first = f->grid.first, *last = f->grid.last;
+    real tot = 0, rtot = 0, thr, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38,
+         v_hi = (real)-3e38;
+    const real mid = yr - hstpf__dist_sample(&f->de, 0x80000000u); /* y less e's median */
+    const real a0 = acc - m->k0;                                   /* net acceleration at rest */
+    const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1;         /* < 0: the rest mass is held */
+    int i, j, any = 0;
+    tot = hstpf__grid_sum(p, NS * NV);
+    rtot = hstpf__grid_sum(rest, NS);
+    tot += rtot;
+    thr = KERN_TAIL * tot / (real)(NS * NV);
+    for (j = 0; j < NV; ++j) {
+        const real *r = p + j * NS, sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
+        int a = 0, b = NS - 1;
+        while (a <= b && r[a] <= thr) {
+            ++a;
+        }
+        while (b >= a && r[b] <= thr) {
+            --b;
+        }
+        first[j] = (int16_t)a;
+        last[j] = (int16_t)b;
+        if (a > b) {
+            continue;
+        }
+        any = 1;
+        vimg[j] = hstpf__grid_speed_map(m, g[2] + (real)j * g[3], dt, acc);
+        vimg[j + 1] = hstpf__grid_speed_map(m, g[2] + (real)(j + 1) * g[3], dt, acc);
+        s_lo = g[0] + (real)a * g[1] + sh < s_lo ? g[0] + (real)a * g[1] + sh : s_lo;
+        s_hi = g[0] + (real)(b + 1) * g[1] + sh > s_hi ? g[0] + (real)(b + 1) * g[1] + sh : s_hi;
+        for (i = j; i <= j + 1; ++i) {
+            const real vi = vimg[i] > (real)0 ? vimg[i] : (real)0; /* never below 0 */
+            v_lo = vi < v_lo ? vi : v_lo;
+            v_hi = vi > v_hi ? vi : v_hi;
+        }
+    }
+    if (rtot > thr) { /* the mass at rest: no shift; it starts at rest_v if it moves */
+        int a = 0, b = NS - 1;
+        while (a < b && rest[a] <= thr) {
+            ++a;
+        }
+        while (b > a && rest[b] <= thr) {
+            --b;
+        }
+        s_lo = g[0] + (real)a * g[1] < s_lo ? g[0] + (real)a * g[1] : s_lo;
+        s_hi = g[0] + (real)(b + 1) * g[1] > s_hi ? g[0] + (real)(b + 1) * g[1] : s_hi;
+        v_lo = rest_v > (real)0 && rest_v < v_lo ? rest_v : (v_lo < (real)3e38 ? v_lo : (real)0);
+        v_hi = rest_v > v_hi ? rest_v : (v_hi > (real)-3e38 ? v_hi : (real)0);
+        any = 1;
+    }
+    if (!any) { /* cannot happen (normalised mass); keep the old box */
+        s_lo = g[0];
+        s_hi = g[0] + (real)NS * g[1];
+        v_lo = g[2];
+        v_hi = g[2] + (real)NV * g[3];
+    } else {
+        predicted_box(f, l, dt, scale, tot, has_y, yr, mid, rtot > (real)0 ? rest_v : (real)-1, &s_lo, &s_hi, &v_lo,
+                      &v_hi);
+    }
+    if (has_y) {
+        /* a measurement whose middle lies beyond the predicted box pulls
+         * the posterior out of it: the box reaches to the measurement's
+         * 1 %..99 % range, or the model could never catch up */
+        if (mid < s_lo || mid > s_hi) {
+            const real e_hi = hstpf__dist_sample(&f->de, 0xFD70A3D7u), e_lo = hstpf__dist_sample(&f->de, 0x028F5C29u);
+            s_lo = yr - e_hi < s_lo ? yr - e_hi : s_lo;
+            s_hi = yr - e_lo > s_hi ? yr - e_lo : s_hi;
+        }
+    }
+    v_lo = v_lo > (real)0 ? v_lo : (real)0; /* a train never reverses: the box starts at 0 at most */
+    if (s_hi - s_lo < DS_MIN * (real)NS) {
+        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
+        s_hi = s_lo + DS_MIN * (real)NS;
+    }
+    if (v_hi - v_lo < DV_MIN * (real)NV) {
+        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
+        v_lo = v_lo > (real)0 ? v_lo : (real)0;
+        v_hi = v_lo + DV_MIN * (real)NV;
+    }
+    ng[0] = s_lo;
+    ng[1] = (s_hi - s_lo) / (real)NS;
+    ng[2] = v_lo;
+    ng[3] = (v_hi - v_lo) / (real)NV;
+    *tot_out = tot;
+    *rtot_out = rtot;
+}

@@ -1,0 +1,139 @@
+/* Grid engine: the process noise as kernels of cell masses and their
+ * convolution with the transported cells (step 3 of docs/grid.md). */
+#include <math.h>
+#include <string.h>
+
+#include "grid.h"
+
+/* Kernel of the noise scale * X on cells of width h: k[m - m0] = P(noise in
+ * cell m) / P(noise within the KERN_TAIL quantiles), for the offsets m in
+ * [m0, m0 + n) that lie within +-reach cells (farther ones cannot land on
+ * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
+int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k, int *m0)
+{
+    const real lo = scale * hstpf__grid_tail_quantile(d, 0) / h, hi = scale * hstpf__grid_tail_quantile(d, 1) / h;
+    const int cap = (HSTPF__GRID_K - 1) / 2;
+    int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
+    real sum = 0, total, el, eh;
+    reach = reach < cap ? reach : cap;
+    total = scale > (real)0 ? hstpf__grid_prob_in(d, ((real)a - (real)0.5) * h / scale, ((real)b + (real)0.5) * h / scale)
+                            : (real)0;
+    a = a < -reach ? -reach : (a > reach ? reach : a);
+    b = b > reach ? reach : (b < -reach ? -reach : b);
+    n = b - a + 1;
+    if (scale > (real)0) { /* each edge's CDF once: tap m's upper edge is tap m + 1's lower */
+        hstpf__grid_cdf2(d, ((real)a - (real)0.5) * h / scale, &el, &eh);
+        for (m = 0; m < n; ++m) {
+            real ul, uh, p;
+            hstpf__grid_cdf2(d, ((real)(a + m) + (real)0.5) * h / scale, &ul, &uh);
+            p = eh < (real)0.5 ? eh - uh : ul - el; /* as hstpf__grid_prob_in */
+            k[m] = p > (real)0 ? p : (real)0;
+            sum += k[m];
+            el = ul;
+            eh = uh;
+        }
+    } else {
+        for (m = 0; m < n; ++m) {
+            k[m] = 0;
+        }
+    }
+    if (!(sum > (real)0) || !(total > (real)0)) { /* no spread at this scale: a point mass at offset 0 */
+        const int z = a > 0 ? 0 : (b < 0 ? n - 1 : -a);
+        for (m = 0; m < n; ++m) {
+            k[m] = m == z ? (real)1 : (real)0;
+        }
+        total = 1;
+    }
+    for (m = 0; m < n; ++m) {
+        k[m] /= total;
+    }
+    *m0 = a;
+    return n;
+}
+
+/* Position noise on one row, in place over [c0, c1] -> [o0, o1]: o[i] =
+ * sum_k ks[k] x[i - m0s - k] over every tap, with x the input padded with
+ * zeros (pad: scratch of (c1 - c0 + 1) + 2 (nks - 1) values). The padding's
+ * terms add exact zeros, so the sum is that of the taps that reach, in the
+ * same order, and the loop over i vectorises. */
+static void conv_row(real *o, real *pad, int c0, int c1, const real *ks, int nks, int m0s)
+{
+    const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
+    real *x = pad + (nks - 1) - c0; /* x[t] for t in [c0 - nks + 1, c1 + nks - 1] */
+    int i, k;
+    for (i = 0; i < (c1 - c0 + 1) + 2 * (nks - 1); ++i) {
+        pad[i] = 0;
+    }
+    for (i = c0; i <= c1; ++i) {
+        x[i] = o[i];
+        o[i] = 0;
+    }
+    for (k = 0; k < nks; ++k) {
+        const real c = ks[k];
+        const real *src = x - m0s - k;
+        for (i = o0; i <= o1; ++i) {
+            o[i] += c * src[i];
+        }
+    }
+}
+
+/* Step 3: speed noise from work into p (what it would take below 0 goes to
+ * rest: a train never reverses), then position noise in place, also on the
+ * mass that came to rest within the step; the held mass gets none. Only
+ * the rows and columns that can receive mass are visited. */
+void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
+{
+    real *p = f->grid.p[l], *w = f->grid.work, *kv = f->grid.kv, *ks = f->grid.ks;
+    real *rest = f->grid.rest[l], *rpend = f->grid.rpend;
+    int16_t *box = f->grid.box;
+    int m0v, m0s, nkv, nks, j, k, i, r0 = 0, r1 = -1, c0 = 0, c1 = -1;
+    nkv = hstpf__grid_kernel(&f->dv, scale, ng[3], NV - 1, kv, &m0v);
+    nks = hstpf__grid_kernel(&f->ds, scale, ng[1], NS - 1, ks, &m0s);
+    memset(p, 0, sizeof f->grid.p[l]);
+    if (box[1] >= box[0]) {
+        r0 = box[0] + m0v;
+        r1 = box[1] + m0v + nkv - 1;
+        r0 = r0 < 0 ? 0 : r0;
+        r1 = r1 > NV - 1 ? NV - 1 : r1;
+        c0 = box[2];
+        c1 = box[3];
+        for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
+            real *o = p + j * NS;
+            for (k = 0; k < nkv; ++k) {
+                const int src = j - m0v - k;
+                const real c = kv[k];
+                const real *r;
+                if (src < box[0] || src > box[1] || c <= (real)0) {
+                    continue;
+                }
+                r = w + src * NS;
+                for (i = c0; i <= c1; ++i) {
+                    o[i] += c * r[i];
+                }
+            }
+        }
+        if (ng[2] <= (real)0) { /* the box starts at 0: what falls below is at rest */
+            for (j = box[0]; j <= box[1]; ++j) {
+                const real *r = w + j * NS;
+                real c = 0;
+                for (k = 0; k < nkv && j + m0v + k < 0; ++k) {
+                    c += kv[k];
+                }
+                if (c > (real)0) {
+                    for (i = c0; i <= c1; ++i) {
+                        rpend[i] += c * r[i];
+                    }
+                }
+            }
+        }
+    }
+    if (!(nks == 1 && m0s == 0)) { /* work is free now: the padded rows */
+        for (j = r0; j <= r1; ++j) {
+            conv_row(p + j * NS, w, c0, c1, ks, nks, m0s);
+        }
+        conv_row(rpend, w, 0, NS - 1, ks, nks, m0s);
+    }
+    for (i = 0; i < NS; ++i) {
+        rest[i] = f->grid.rnew[i] + rpend[i];
+    }
+}

@@ -1,0 +1,151 @@
+/* Grid engine: the time update's transport (step 2 of docs/grid.md): each
+ * cell moved by the deterministic dynamics and its mass shared among the
+ * new cells it overlaps (a conservative remap). */
+#include <math.h>
+#include <string.h>
+
+#include "grid.h"
+
+
+/* Conservative remap: input cell i covers [a + i w, a + (i + 1) w] in units
+ * of output cells; its mass goes to the output cells it overlaps, in
+ * proportion. Mass beyond the output is dropped. */
+void hstpf__grid_remap(const real *in, int i0, int i1, real a, real w, real *out, int n_out)
+{
+    const real inv = (real)1 / w;
+    int i;
+    for (i = i0; i <= i1; ++i) {
+        const real x0 = a + (real)i * w, x1 = x0 + w, m = in[i];
+        int k;
+        if (m <= MASS_MIN || x1 <= (real)0 || x0 >= (real)n_out) {
+            continue;
+        }
+        k = (int32_t)x0;
+        k -= (real)k > x0 ? 1 : 0; /* floor */
+        if (w <= (real)1 && k >= 0 && k + 1 < n_out) { /* one or two cells, without a branch on which */
+            real fr = ((real)(k + 1) - x0) * inv;
+            fr = fr < (real)1 ? fr : (real)1;
+            out[k] += m * fr;
+            out[k + 1] += m - m * fr;
+        } else if (x1 <= (real)(k + 1)) { /* inside one output cell */
+            out[k] += m;
+        } else if (w <= (real)1 || x1 <= (real)(k + 2)) { /* across one edge */
+            const real fr = ((real)(k + 1) - x0) * inv;
+            if (k >= 0) {
+                out[k] += m * fr;
+            }
+            if (k + 1 < n_out) {
+                out[k + 1] += m - m * fr;
+            }
+        } else {
+            for (k = k > 0 ? k : 0; k < n_out && (real)k < x1; ++k) {
+                const real lo = x0 > (real)k ? x0 : (real)k;
+                const real hi = x1 < (real)(k + 1) ? x1 : (real)(k + 1);
+                if (hi > lo) {
+                    out[k] += m * (hi - lo) * inv;
+                }
+            }
+        }
+    }
+}
+
+/* Step 2: the cells transported by the dynamics into f->grid.work, on the
+ * new grid ng (from hstpf__grid_new_box, which set first/last and vimg);
+ * the mass that comes to rest goes to rnew (held) and rpend (to be
+ * diffused). tot, rtot: the model's mass and its mass at rest. Returns the
+ * fraction of the mass held or come to rest. */
+real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, const real *ng, real tot,
+                           real rtot)
+{
+    const real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
+    real *w = f->grid.work, *row = f->grid.row;
+    const real *vimg = f->grid.vimg;
+    const int16_t *first = f->grid.first, *last = f->grid.last;
+    int16_t *box = f->grid.box;
+    const real a0 = acc - m->k0;                           /* net acceleration at rest */
+    const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1; /* < 0: the rest mass is held */
+    real held = 0;
+    int i, j;
+    memset(w, 0, sizeof f->grid.work);
+    memset(f->grid.rnew, 0, sizeof f->grid.rnew);
+    memset(f->grid.rpend, 0, sizeof f->grid.rpend);
+    box[0] = NV; /* rows, then columns, of work that receive mass */
+    box[1] = -1;
+    box[2] = NS;
+    box[3] = -1;
+    for (j = 0; j < NV; ++j) {
+        real lo_v, hi_v, f0 = 0, rm = 0, ta, tb;
+        const real a = (g[0] + dt * (g[2] + ((real)j + (real)0.5) * g[3]) - ng[0]) / ng[1];
+        int k, c0, c1;
+        if (first[j] > last[j]) {
+            continue;
+        }
+        lo_v = vimg[j] < vimg[j + 1] ? vimg[j] : vimg[j + 1];
+        hi_v = vimg[j] < vimg[j + 1] ? vimg[j + 1] : vimg[j];
+        if (hi_v <= (real)0) { /* the whole row comes to rest within the step */
+            f0 = 1;
+        } else if (lo_v < (real)0) {
+            f0 = -lo_v / (hi_v - lo_v);
+            lo_v = 0;
+        }
+        /* columns this row reaches */
+        c0 = (int)(a + (real)first[j] * g[1] / ng[1]);
+        c1 = (int)(a + (real)(last[j] + 1) * g[1] / ng[1]);
+        c0 = c0 < 0 ? 0 : (c0 > NS - 1 ? NS - 1 : c0);
+        c1 = c1 < 0 ? 0 : (c1 > NS - 1 ? NS - 1 : c1);
+        for (i = c0; i <= c1; ++i) {
+            row[i] = 0;
+        }
+        hstpf__grid_remap(p + j * NS, first[j], last[j], a, g[1] / ng[1], row, NS);
+        if (f0 > (real)0) { /* s' = s + T v, v' = 0: to rest, position noise to come */
+            for (i = c0; i <= c1; ++i) {
+                f->grid.rpend[i] += f0 * row[i];
+                rm += row[i];
+            }
+            held += f0 * rm;
+            if (f0 >= (real)1) {
+                continue;
+            }
+        }
+        box[2] = (int16_t)(c0 < box[2] ? c0 : box[2]);
+        box[3] = (int16_t)(c1 > box[3] ? c1 : box[3]);
+        ta = (lo_v - ng[2]) / ng[3];
+        tb = (hi_v - ng[2]) / ng[3];
+        if (tb - ta < (real)1e-6) { /* the whole row maps to one speed */
+            ta = tb = ta < (real)0 ? (real)0 : (ta > (real)(NV - 1) ? (real)(NV - 1) : ta);
+        }
+        for (k = ta > (real)0 ? (int32_t)ta : 0; k < NV && (k == (int32_t)ta || (real)k < tb); ++k) {
+            const real lo = ta > (real)k ? ta : (real)k, hi = tb < (real)(k + 1) ? tb : (real)(k + 1);
+            const real frac = (tb > ta ? (hi - lo) / (tb - ta) : (real)1) * ((real)1 - f0);
+            real *o = w + k * NS;
+            if (frac > (real)0) {
+                for (i = c0; i <= c1; ++i) {
+                    o[i] += frac * row[i];
+                }
+                box[0] = (int16_t)(k < box[0] ? k : box[0]);
+                box[1] = (int16_t)(k > box[1] ? k : box[1]);
+            }
+        }
+    }
+    if (rtot > (real)0) { /* the mass at rest, on the new position cells */
+        memset(row, 0, sizeof f->grid.row);
+        hstpf__grid_remap(rest, 0, NS - 1, (g[0] - ng[0]) / ng[1], g[1] / ng[1], row, NS);
+        if (rest_v < (real)0) { /* held: s' = s, v' = 0, no process noise */
+            for (i = 0; i < NS; ++i) {
+                f->grid.rnew[i] += row[i];
+            }
+            held += rtot;
+        } else { /* starts moving: v' = T a0 + noise */
+            int k = (int32_t)((rest_v - ng[2]) / ng[3]);
+            k = k < 0 ? 0 : (k > NV - 1 ? NV - 1 : k);
+            for (i = 0; i < NS; ++i) {
+                w[k * NS + i] += row[i];
+            }
+            box[0] = (int16_t)(k < box[0] ? k : box[0]);
+            box[1] = (int16_t)(k > box[1] ? k : box[1]);
+            box[2] = 0;
+            box[3] = NS - 1;
+        }
+    }
+    return tot > (real)0 ? held / tot : (real)0;
+}
