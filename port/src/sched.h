@@ -122,7 +122,10 @@ typedef struct {
      * second, since lag_rx, by at least lag_min: a receive clock that
      * stepped forward (a stall's backlog drains in a burst and ends it) */
     uint8_t lagging;
-    int64_t lag_rx, lag_min;
+    int64_t lag_rx, lag_first, lag_min;
+    /* the latest fix's receive latency above the least one (>= 0): the
+     * other inputs and the predict steps are dated by receive time less it */
+    int64_t fix_lat;
     uint8_t restart_next; /* a clock step: the next position restarts the estimator */
     const volatile sig_atomic_t *stop; /* loops end when *stop (may be NULL) */
     hstpfd_sched_counts_t n;

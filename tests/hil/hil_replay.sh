@@ -17,7 +17,9 @@ speed=${HSTPF_HIL_SPEED:-10}
 dur=${HSTPF_HIL_DURATION:-600}
 bin=$build/port/hstpfd
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/hstpf-hil.XXXXXX")
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$tmp"' EXIT
+# HSTPF_HIL_KEEP=DIR: copy the run's files (logs, summaries, scores) there
+keep=${HSTPF_HIL_KEEP:-}
+trap 'kill $(jobs -p) 2>/dev/null || true; [ -z "$keep" ] || { mkdir -p "$keep" && cp -r "$tmp"/. "$keep"/; }; rm -rf "$tmp"' EXIT
 fail() { echo "hil_replay: FAIL: $*" >&2; cat "$tmp"/*.err >&2 2>/dev/null || true; exit 1; }
 
 hstpf-simulate --type CRH3 --profile paper --noise case1 --duration "$dur" --seed 7 -o "$tmp/run.log" > "$tmp/sim.json"

@@ -82,6 +82,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         lag = float(np.min(rate * np.array(in_ts) - in_sim))
     pos_msg = codec.message(POSITION)
     fix_in: Optional[int] = None  # FixTime of the latest matched input
+    fix_sim: Dict[int, float] = {}  # FixTime -> simulation time of the latest matched input with it
+    prev_est: Optional[Tuple[float, int, float]] = None  # the latest dated estimate: sim time, EstTime, bus time
     pending = None  # an EstState waiting for the EstQuality frame that dates it
     n_dated = 0
 
@@ -102,6 +104,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
                 t_in = m.timestamp
                 p = pos_msg.decode(bytes(m.data), decode_choices=False)
                 fix_in = int(p["FixTime"]) if p.get("FixTimeValid", 0) >= 0.5 else None
+                if fix_in is not None:
+                    fix_sim[fix_in] = t
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
@@ -115,15 +119,26 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
         if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
                 and t_sim is not None:
-            # the estimate's own time, on the fix clock: the time with that
-            # FixTime nearest to where the bus clock puts it (predict-only
-            # steps may run seconds past inputs that come late; an estimator
-            # may lag): within half a wrap of that
-            expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
-            d = (int(sig["EstTime"]) - fix_in - expect_ms) % FIX_TIME_WRAP_MS
-            if d > FIX_TIME_WRAP_MS / 2:
-                d -= FIX_TIME_WRAP_MS
-            t_est = t_sim + (expect_ms + d) / 1000.0
+            # the estimate's own time, on the fix clock. A step on a fix has
+            # that fix's FixTime: the latest recorded input with it dates the
+            # estimate exactly. A predict-only step lies after the estimate
+            # before it (steps never go back) by less than a wrap when the
+            # two are close on the bus. Otherwise (the first estimate, or one
+            # after a long silence of the outputs): the time with that
+            # FixTime nearest to where the bus clock puts it.
+            est_ms = int(sig["EstTime"])
+            t_est = fix_sim.get(est_ms)
+            if t_est is not None and t_sim - t_est > FIX_TIME_WRAP_MS / 2000.0:
+                t_est = None  # that input is more than half a wrap old: another fix's time
+            if t_est is None and prev_est is not None and (m.timestamp - prev_est[2]) * rate < FIX_TIME_WRAP_MS / 2000.0:
+                t_est = prev_est[0] + ((est_ms - prev_est[1]) % FIX_TIME_WRAP_MS) / 1000.0
+            if t_est is None:
+                expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
+                d = (est_ms - fix_in - expect_ms) % FIX_TIME_WRAP_MS
+                if d > FIX_TIME_WRAP_MS / 2:
+                    d -= FIX_TIME_WRAP_MS
+                t_est = t_sim + (expect_ms + d) / 1000.0
+            prev_est = (t_est, est_ms, m.timestamp)
             if pending is not None:
                 series[EST_STATE].append((t_est, pending[2]))
                 n_dated += 1
