@@ -70,16 +70,19 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
-    # For dating by EstTime: simulation time as the bus clock runs, from the
-    # inputs with the least latency (as hstpfd's fix clock does): rate =
-    # the replay's speed-up, lag = the least latency. An estimator steps on
-    # that clock, so an estimate lies near sim_of(its bus time).
+    # For dating by EstTime when nothing else does: simulation seconds per
+    # bus second (the replay's speed-up), the median over consecutive inputs
+    # (stalls and their bursts do not move it). hstpfd runs its predictions
+    # on the receive time less the latest fix's latency, so a prediction
+    # lies near the latest input's time plus the bus time since it, at that rate.
     in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
                        if m.arbitration_id == pos_id and bytes(m.data) in input_map])
-    rate, lag = 1.0, 0.0
-    if len(in_ts) > 10 and np.ptp(in_ts) > 0:
-        rate = float(np.polyfit(in_ts, in_sim, 1)[0])
-        lag = float(np.min(rate * np.array(in_ts) - in_sim))
+    rate = 1.0
+    if len(in_ts) > 10:
+        d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
+        ok = (d_ts > 0) & (d_sim > 0)
+        if ok.sum() > 10:
+            rate = float(np.median(d_sim[ok] / d_ts[ok]))
     pos_msg = codec.message(POSITION)
     fix_in: Optional[int] = None  # FixTime of the latest matched input
     fix_sim: Dict[int, float] = {}  # FixTime -> simulation time of the latest matched input with it
@@ -125,7 +128,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             # before it (steps never go back) by less than a wrap when the
             # two are close on the bus. Otherwise (the first estimate, or one
             # after a long silence of the outputs): the time with that
-            # FixTime nearest to where the bus clock puts it.
+            # EstTime nearest to the latest input's plus the bus time since.
             est_ms = int(sig["EstTime"])
             t_est = fix_sim.get(est_ms)
             if t_est is not None and t_sim - t_est > FIX_TIME_WRAP_MS / 2000.0:
@@ -133,7 +136,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             if t_est is None and prev_est is not None and (m.timestamp - prev_est[2]) * rate < FIX_TIME_WRAP_MS / 2000.0:
                 t_est = prev_est[0] + ((est_ms - prev_est[1]) % FIX_TIME_WRAP_MS) / 1000.0
             if t_est is None:
-                expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
+                expect_ms = rate * (m.timestamp - t_in) * 1000.0  # how far past the latest input
                 d = (est_ms - fix_in - expect_ms) % FIX_TIME_WRAP_MS
                 if d > FIX_TIME_WRAP_MS / 2:
                     d -= FIX_TIME_WRAP_MS
