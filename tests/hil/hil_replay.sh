@@ -9,18 +9,21 @@
 # drop, a 2 s silence): each must be detected and counted as injected, and
 # CRH3 still declared.
 #
-#   hil_replay.sh [BUILD_DIR]          the bus part and the scoring (needs vcan0)
-#   hil_replay.sh --bus DIR [BUILD]    only the bus part, its files into DIR
+#   hil_replay.sh [BUILD_DIR]          all of it (needs vcan0)
+#   hil_replay.sh --sim DIR            only the simulated run, into DIR
+#   hil_replay.sh --bus DIR [BUILD]    only the bus part (simulating first if
+#                                      DIR has no run yet), its files into DIR
 #   hil_replay.sh --score DIR          only the scoring and the checks of DIR
 #
-# tests/hil/run_hil.sh runs the bus part through tests/hil/with_vcan.sh
-# (vcan0 natively or in the QEMU VM) and scores on the host: under the VM's
-# emulation the scoring (numpy, plots) took 3 of every 4 minutes.
+# tests/hil/run_hil.sh simulates and scores on the host and runs only the bus
+# part through tests/hil/with_vcan.sh (vcan0 natively or in the QEMU VM):
+# under the VM's emulation numpy, the simulation and the plots took most of
+# the stage's time.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 phase=all
 case "${1:-}" in
---bus | --score) phase=${1#--}; dir=${2:?"$1 needs a folder"}; shift 2 ;;
+--sim | --bus | --score) phase=${1#--}; dir=${2:?"$1 needs a folder"}; shift 2 ;;
 esac
 iface=${HSTPF_VCAN_IFACE:-vcan0}
 export CAN_INTERFACE=socketcan # python-can has no default interface; -c names the channel
@@ -64,9 +67,12 @@ score_once() { # name
   echo "== $name"; cat "$tmp/$name.score.txt"
 }
 
+if [ "$phase" != score ] && { [ "$phase" != bus ] || [ ! -s "$tmp/run.log" ]; }; then
+  hstpf-simulate --type CRH3 --profile paper --noise case1 --duration "$dur" --seed 7 -o "$tmp/run.log" > "$tmp/sim.json"
+fi
+[ "$phase" != sim ] || exit 0
 if [ "$phase" != score ]; then
   bin=$(cd "${1:-$root/build}" && pwd)/port/hstpfd
-  hstpf-simulate --type CRH3 --profile paper --noise case1 --duration "$dur" --seed 7 -o "$tmp/run.log" > "$tmp/sim.json"
   bus_once clean
   bus_once faults --ids 0x100,0x101 --seed 3 --corrupt 0.01 --duplicate 0.01 --drop 0.01 --silence-window 300:302
   [ "$phase" = all ] || { echo "hil_replay: bus part done, files in $tmp"; exit 0; }
