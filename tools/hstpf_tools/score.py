@@ -55,8 +55,11 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
     return float(np.sqrt(np.mean(((we - wt) / wt) ** 2)))
 
 
-def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
-    """Decoded output series with simulation times."""
+def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float,
+            speed: Optional[float]):
+    """Decoded output series with simulation times. speed: the replay's
+    speed-up (None: 1 for time alignment; measured from the inputs for
+    inputs alignment)."""
     series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
                                HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
@@ -77,8 +80,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # lies near the latest input's time plus the bus time since it, at that rate.
     in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
                        if m.arbitration_id == pos_id and bytes(m.data) in input_map])
-    rate = 1.0
-    if len(in_ts) > 10:
+    rate = speed if speed is not None else 1.0
+    if speed is None and len(in_ts) > 10:
         d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
         ok = (d_ts > 0) & (d_sim > 0)
         if ok.sum() > 10:
@@ -119,7 +122,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         e2e_results[name][res] += 1
         if sig is None:
             continue
-        t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
+        t = t_sim if align == "inputs" else (m.timestamp - t0) * (speed if speed is not None else 1.0)
         if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
                 and t_sim is not None:
             # the estimate's own time, on the fix clock. A step on a fix has
@@ -127,8 +130,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             # estimate exactly. A predict-only step lies after the estimate
             # before it (steps never go back) by less than a wrap when the
             # two are close on the bus. Otherwise (the first estimate, or one
-            # after a long silence of the outputs): the time with that
-            # EstTime nearest to the latest input's plus the bus time since.
+            # after a long silence of the outputs): from the latest input's
+            # time and the bus time since, below.
             est_ms = int(sig["EstTime"])
             t_est = fix_sim.get(est_ms)
             if t_est is not None and t_sim - t_est > FIX_TIME_WRAP_MS / 2000.0:
@@ -136,11 +139,13 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             if t_est is None and prev_est is not None and (m.timestamp - prev_est[2]) * rate < FIX_TIME_WRAP_MS / 2000.0:
                 t_est = prev_est[0] + ((est_ms - prev_est[1]) % FIX_TIME_WRAP_MS) / 1000.0
             if t_est is None:
+                # hstpfd never predicts past the latest input plus the bus
+                # time since it (a late publication only makes the estimate
+                # older than that): the latest time with that EstTime not
+                # after it, with 0.5 s for the rate's error
                 expect_ms = rate * (m.timestamp - t_in) * 1000.0  # how far past the latest input
-                d = (est_ms - fix_in - expect_ms) % FIX_TIME_WRAP_MS
-                if d > FIX_TIME_WRAP_MS / 2:
-                    d -= FIX_TIME_WRAP_MS
-                t_est = t_sim + (expect_ms + d) / 1000.0
+                d = -((expect_ms + 500.0 - (est_ms - fix_in)) % FIX_TIME_WRAP_MS)  # in (-wrap, 0]
+                t_est = t_sim + (expect_ms + 500.0 + d) / 1000.0
             prev_est = (t_est, est_ms, m.timestamp)
             if pending is not None:
                 series[EST_STATE].append((t_est, pending[2]))
@@ -408,7 +413,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
-    p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
+    p.add_argument("--speed", type=float, default=None,
+                   help="replay speed-up (time alignment: 1; inputs alignment: measured from the inputs, used "
+                        "only to date an estimate after a silence of the outputs)")
     cli.add_json_argument(p, what="the metrics as JSON", default=" (the table then goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
     p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
@@ -430,7 +437,7 @@ def _main(argv) -> int:
     align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
     if align == "inputs" and not a.input_log:
         raise cli.CliError(cli.EXIT_USAGE, "--align inputs needs --input-log")
-    if a.speed <= 0:
+    if a.speed is not None and a.speed <= 0:
         raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
     if [a.log, a.input_log, a.truth].count("-") > 1:
         raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
