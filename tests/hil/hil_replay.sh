@@ -61,7 +61,7 @@ bus_once() { # name, replay options...
 
 score_once() { # name
   local name=$1
-  hstpf-score "$tmp/$name.bus.log" --truth "$tmp/run_truth.csv" --input-log "$tmp/run.log" \
+  hstpf-score "$tmp/$name.bus.log" --truth "$tmp/run_truth.csv" --input-log "$tmp/run.log" --speed "$speed" \
       --json "$tmp/$name.score.json" --plots "$tmp/$name-plots" > "$tmp/$name.score.txt" 2> "$tmp/$name.score.err" \
       || fail "$name: score failed"
   echo "== $name"; cat "$tmp/$name.score.txt"
