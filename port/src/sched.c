@@ -63,6 +63,9 @@ static void seg_reset(hstpfd_sched_t *s, int64_t t0)
 /* u from t on (t >= every segment start). */
 static void seg_push(hstpfd_sched_t *s, int64_t t, double u)
 {
+    if (s->n_seg > 0 && t < s->seg_t[s->n_seg - 1]) {
+        t = s->seg_t[s->n_seg - 1]; /* dated before the last step (a backlog): holds from there */
+    }
     if (s->n_seg > 0 && s->seg_t[s->n_seg - 1] == t) {
         s->seg_u[s->n_seg - 1] = u;
         return;
@@ -139,8 +142,19 @@ static void emit(hstpfd_sched_t *s, int64_t t_end, int has_pos, double y, int re
     }
 }
 
+/* Receive time -> the inputs' timeline: less the latest fix's latency above
+ * the least one (0 without a fix clock). A stalled path (a replayer, a
+ * gateway) delays every frame alike, so a frame received in a fix's
+ * backlog is dated as late as that fix was; on one bus with independent
+ * senders that latency is the bus jitter, a few ms. */
+static int64_t in_time(const hstpfd_sched_t *s, int64_t t_rx)
+{
+    return s->have_fix ? t_rx - s->fix_lat : t_rx;
+}
+
 static void advance(hstpfd_sched_t *s, int64_t t)
 {
+    int64_t ti;
     if (!s->started) {
         s->started = 1;
         s->t_now = s->t_start = s->t_step = t;
@@ -159,10 +173,11 @@ static void advance(hstpfd_sched_t *s, int64_t t)
         s->pos_stale = 1;
         ++s->n.pos_stale;
     }
+    ti = in_time(s, t);
     if (s->pos_stale && s->have_step && s->cfg.stale_policy == HSTPFD_STALE_PREDICT) {
-        while (t - s->t_step > s->pred_us) {
+        while (ti - s->t_step > s->pred_us) {
             if (s->stop != NULL && *s->stop) {
-                s->t_step = t - s->pred_us; /* the rest is not predicted */
+                s->t_step = ti - s->pred_us; /* the rest is not predicted */
                 seg_reset(s, s->t_step);
                 break;
             }
@@ -201,6 +216,7 @@ void hstpfd_sched_clock_step(hstpfd_sched_t *s, int64_t t_us, int dir)
         s->restart_next = 1;
     }
     s->have_fix = 0; /* the fix clock starts again from the next fix */
+    s->fix_lat = 0;
     s->lagging = 0;
 }
 
@@ -213,7 +229,7 @@ void hstpfd_sched_traction(hstpfd_sched_t *s, int64_t t_us, double force_kn)
 {
     advance(s, t_us);
     s->u = hstpfd_traction_unit(force_kn, s->cfg.mass_t);
-    seg_push(s, s->t_now, s->u);
+    seg_push(s, in_time(s, s->t_now), s->u);
     s->have_u = 1;
     s->have_trac = 1;
     s->t_trac = s->t_now;
@@ -230,32 +246,50 @@ static int64_t floor_div(int64_t a, int64_t b)
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
-/* A fix later than the least latency by more than LAG_STEP_US, and fixes
- * that stay so late for LAG_HOLD_US of receive time while they keep coming
- * (a stall's backlog arrives in a burst, then latency is back): the receive
- * clock stepped forward by the smallest of those delays. The fix clock then
- * takes the new offset, so that the traction, dated by the receive clock,
- * and the fixes share one time again; the gap this leaves between steps is
- * the library's to handle (beyond max_gap_s it re-acquires). */
+/* A receive clock that steps forward by X (1 s < X < max_gap_s) and a
+ * stalled or slow sender both make fixes arrive more than LAG_STEP_US later
+ * than the least latency, and both are first predicted across as a
+ * silence. The other inputs and the predict steps are dated by receive time
+ * less the latest fix's latency (in_time), so either way fixes and traction
+ * share one time, and once the fixes' own times pass the predicted steps
+ * they are used again: nothing needs re-dating. Only a fix clock whose fixes
+ * keep coming too late to be used for long is re-dated: a slow sender's
+ * excess grows, its backlog drains when it catches up (the excess falls),
+ * while a stepped clock's excess jumps once and stays. When the excess
+ * has moved by no more than LAG_DRIFT_US for max(LAG_HOLD_US, excess / 2)
+ * of receive time while every fix came too late to be used, the fix clock
+ * takes the new offset (the smallest excess of the window), counted in
+ * fix_clock_steps, and the estimator re-acquires from the next fix (as
+ * after a receive clock step). Any other fix ends the window. Measured in
+ * the HIL stage under a CPU hog: a replayer 10 s behind kept pace without
+ * draining for 3 s, then drained over 20 s (docs/vm.md). */
 #define LAG_STEP_US INT64_C(1000000)
 #define LAG_HOLD_US INT64_C(3000000)
+#define LAG_DRIFT_US INT64_C(500000)
 static void lag_check(hstpfd_sched_t *s, int64_t t_rx)
 {
     const int64_t excess = (t_rx - s->fix_u) - s->fix_off;
-    if (excess <= LAG_STEP_US) {
-        s->lagging = 0;
-        return;
+    const int late = s->have_step && s->fix_u + s->fix_off <= s->t_step;
+    int64_t hold;
+    if (excess <= LAG_STEP_US || !late ||
+        (s->lagging && (excess < s->lag_first - LAG_DRIFT_US || excess > s->lag_first + LAG_DRIFT_US))) {
+        s->lagging = 0; /* used, or a sender falling behind or draining: not a clock step */
+        if (excess <= LAG_STEP_US || !late) {
+            return;
+        }
     }
     if (!s->lagging) {
         s->lagging = 1;
         s->lag_rx = t_rx;
-        s->lag_min = excess;
+        s->lag_first = s->lag_min = excess;
     } else if (excess < s->lag_min) {
         s->lag_min = excess;
     }
-    if (t_rx - s->lag_rx >= LAG_HOLD_US) {
+    hold = s->lag_first / 2 > LAG_HOLD_US ? s->lag_first / 2 : LAG_HOLD_US;
+    if (t_rx - s->lag_rx >= hold) {
         s->fix_off += s->lag_min;
         s->lagging = 0;
+        s->restart_next = 1;
         ++s->n.fix_clock_steps;
     }
 }
@@ -289,6 +323,7 @@ static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_
         }
         s->fix_off = off;
     }
+    s->fix_lat = t_rx - (s->fix_u + s->fix_off);
     s->fix_ms_last = fix_ms;
     s->fix_rx = t_rx;
     ++s->n.fix_dated;

@@ -19,6 +19,16 @@
  *   the smallest receive latency seen, which may creep up by 100 ppm of
  *   elapsed time (clock drift). A fix is therefore dated at or before its
  *   receive time, and receive jitter does not enter dt.
+ * - The other inputs (traction, idle ticks) and the predict steps are dated
+ *   by their receive time less the latest fix's latency above the least one:
+ *   a stalled path delays every frame alike, so the backlog's traction is
+ *   dated as late as its fixes (on one bus, that latency is bus jitter). A
+ *   traction sample dated before the last step holds from that step on.
+ * - A fix clock whose fixes all come too late to be used, more than 1 s
+ *   later than the least latency by an excess that moves less than 0.5 s
+ *   for max(3 s, excess / 2) of receive time, is re-dated by that excess
+ *   (a receive clock step forward; a sender's backlog grows or drains
+ *   instead) and the next position re-acquires.
  * - Traction: zero-order hold of the latest valid sample, converted from
  *   total force (kN) to unit force (N/kN) with the train mass. MEAN: the
  *   time-weighted mean of the held value over the step; LATEST: the value
@@ -38,9 +48,8 @@
  * - Clock steps (hstpfd_sched_clock_step, from the daemon's clock guard):
  *   no predict steps across the step; the fix clock starts again; the next
  *   position restarts the estimator (restart flag) as a first fix. A
- *   shorter forward step of the receive clock is not found here: with fix
- *   times it acts as an outage of its length (predicted across; the fixes
- *   of that length come late and are dropped; dt stays the fixes' own).
+ *   shorter forward step of the receive clock is first predicted across as
+ *   an outage of its length; the fix clock rule above then re-dates it.
  * - Every loop here ends within a bounded number of steps or when *stop is
  *   set (hstpfd_sched_set_stop): SIGTERM is honoured between steps. */
 #ifndef HSTPFD_SCHED_H
@@ -122,7 +131,10 @@ typedef struct {
      * second, since lag_rx, by at least lag_min: a receive clock that
      * stepped forward (a stall's backlog drains in a burst and ends it) */
     uint8_t lagging;
-    int64_t lag_rx, lag_min;
+    int64_t lag_rx, lag_first, lag_min;
+    /* the latest fix's receive latency above the least one (>= 0): the
+     * other inputs and the predict steps are dated by receive time less it */
+    int64_t fix_lat;
     uint8_t restart_next; /* a clock step: the next position restarts the estimator */
     const volatile sig_atomic_t *stop; /* loops end when *stop (may be NULL) */
     hstpfd_sched_counts_t n;

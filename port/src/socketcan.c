@@ -274,8 +274,18 @@ int hstpfd_run_iface(hstpfd_core_t *c, const char *iface, volatile sig_atomic_t 
             return -1;
         }
         if (rc == 0) {
-            /* nothing queued: time has advanced to now without a frame */
-            hstpfd_core_idle(c, now_realtime_us());
+            /* nothing was queued when poll returned, but a daemon held off the
+             * CPU since may have frames queued now, stamped before this
+             * moment: those first, so that time never runs past a queued
+             * frame (it made the backlog late: issue 12, docs/vm.md) */
+            const int64_t now = now_realtime_us();
+            if (io.fd >= 0) {
+                pfd.revents = 0;
+                if (poll(&pfd, 1u, 0) > 0) {
+                    continue;
+                }
+            }
+            hstpfd_core_idle(c, now);
             continue;
         }
         if (pfd.revents & (POLLIN | POLLERR | POLLHUP | POLLNVAL)) {

@@ -5,6 +5,7 @@ import threading
 import time
 
 import can
+import numpy as np
 import pytest
 
 from hstpf_tools import record, replay
@@ -130,3 +131,36 @@ def test_record_cli_gives_up_without_frames(tmp_path, capsys):
     assert out.err == "hstpf-record: no frame came within 0.2 s\n"
     assert (tmp_path / "r.log").read_text() == ""  # created and closed
     assert record.main(["--interface", "virtual", "-o", str(tmp_path / "r.log"), "--max-frames", "0"]) == 2
+
+
+class _StallingBus:
+    """A bus whose send stalls once, for `stall` s before frame `at`; records
+    when each frame went out."""
+
+    def __init__(self, at: int, stall: float):
+        self.at, self.stall, self.sent = at, stall, []
+
+    def send(self, msg, timeout=None):
+        if len(self.sent) == self.at:
+            time.sleep(self.stall)
+        self.sent.append((time.perf_counter(), msg))
+
+
+def test_send_all_catches_up_on_absolute_deadlines(clean_msgs):
+    """The sender stalls 0.3 s at frame 20 of 6 s of log at 10x (0.6 s on
+    the bus): the frames held back go out at once and in order, and the
+    frames due after that keep their deadlines (absolute, from the start;
+    a sender that waited the log's gaps after each frame would send every
+    one of them 0.3 s late), and `behind` says how late the held-back
+    frames went."""
+    msgs = [m for m in clean_msgs if m.timestamp < 506.0 - 1e-9]
+    bus = _StallingBus(20, 0.3)
+    behind: dict = {}
+    assert replay.send_all(bus, msgs, speed=10.0, behind=behind) == len(msgs) == 120
+    assert [m for _, m in bus.sent] == msgs  # all, in order
+    w0 = bus.sent[0][0]
+    late = np.array([w - w0 - (m.timestamp - 500.0) / 10.0 for w, m in bus.sent])
+    due = np.array([(m.timestamp - 500.0) / 10.0 for _, m in bus.sent])
+    assert late[(due > 0.1) & (due < 0.35)].min() > 0.05  # held back by the stall (ends at 0.4 s)
+    assert np.median(late[due > 0.5]) < 0.1  # on schedule again
+    assert behind["over_0.1"] >= 10 and 0.2 <= behind["max"] < 0.6

@@ -266,3 +266,69 @@ def test_est_time_during_a_stall(sim, tmp_path):
     res = json.loads(js.read_text())
     assert res["state_frames_dated"] == res["state_frames"] == 5
     assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+
+
+def test_est_time_behind_lagging_inputs(sim, tmp_path):
+    """From 200 s on every input reaches the bus 6 s late (a replayer that
+    fell behind and keeps pace without catching up), and the estimator steps
+    on each fix as it arrives. The bus clock then puts each estimate 6 s past
+    its fix, more than half the 8.192 s wrap: the recorded fix with the
+    estimate's EstTime dates it exactly (where the bus clock alone was a wrap
+    off: about 700 m at 90 m/s)."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for m in read_log(str(log)):
+        late = 6.0 if m.timestamp >= 200.0 else 0.0
+        msgs.append(message(m.timestamp + late, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id != 0x100 or abs(m.timestamp - round(m.timestamp)) > 1e-6:
+            continue
+        _, sig, _ = FrameCodec().decode(0x100, bytes(m.data), check=False)
+        s = np.interp(m.timestamp, rows["time_s"], rows["position_m"])
+        v = np.interp(m.timestamp, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(m.timestamp + late + 0.0001, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1, "EstTime": sig["FixTime"]})
+        msgs.append(message(m.timestamp + late + 0.0002, fid, data))
+    rec = tmp_path / "lagging.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "lagging.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] >= res["state_frames"] > 300
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+    assert res["speed_rms_mps"] == pytest.approx(0.1, abs=0.006)
+
+
+def test_est_time_after_an_output_silence(sim, tmp_path):
+    """Inputs 6 s late from 200 s on (a backlog), the estimator silent from
+    200 to 215 s (held off the CPU), and each estimate a prediction 50 ms past
+    the fix it followed (no fix has its EstTime). After the silence the
+    estimate before it is too far back to count from: it is dated from the
+    latest input and the bus time since (hstpfd never predicts past that),
+    not from the bus clock alone, which runs 6 s ahead of the inputs and put
+    it a wrap away."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    msgs = []
+    for m in read_log(str(log)):
+        late = 6.0 if m.timestamp >= 200.0 else 0.0
+        msgs.append(message(m.timestamp + late, m.arbitration_id, bytes(m.data)))
+        if m.arbitration_id != 0x100 or abs(m.timestamp - round(m.timestamp)) > 1e-6 or 200.0 <= m.timestamp < 215.0:
+            continue
+        _, sig, _ = FrameCodec().decode(0x100, bytes(m.data), check=False)
+        ts = m.timestamp + 0.05
+        s = np.interp(ts, rows["time_s"], rows["position_m"])
+        v = np.interp(ts, rows["time_s"], rows["speed_mps"])
+        fid, data = codec.encode("EstState", {"EstValid": 1, "EstPosition": s + 1.0, "EstSpeed": v + 0.1})
+        msgs.append(message(m.timestamp + late + 0.005, fid, data))
+        fid, data = codec.encode("EstQuality", {"QualValid": 1, "EstTimeValid": 1, "EstTime": (sig["FixTime"] + 50) % 8192})
+        msgs.append(message(m.timestamp + late + 0.0051, fid, data))
+    msgs.sort(key=lambda m: m.timestamp)
+    rec = tmp_path / "silent.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "silent.json"
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(log), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["state_frames_dated"] >= res["state_frames"] > 300
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)

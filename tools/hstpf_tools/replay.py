@@ -160,17 +160,24 @@ class SendError(Exception):
 
 
 def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, fast: bool = False,
-             stop: Optional[cli.Stop] = None, progress: Optional[cli.Progress] = None) -> int:
+             stop: Optional[cli.Stop] = None, progress: Optional[cli.Progress] = None,
+             behind: Optional[dict] = None) -> int:
     """Sends each message at its log time scaled by 1/speed from the first
     (fast: back to back), as python-can's MessageSync with gap 0, but waits
     in slices of at most 50 ms so that a stop (SIGINT/SIGTERM) ends it at
-    once. Retries when the interface queue is full. Returns the count sent;
+    once. The deadlines are absolute (from the start), so a stall does not
+    shift what follows: the frames it held back go out at once, in order,
+    and the schedule is met again as soon as the sender catches up.
+    Retries when the interface queue is full. `behind` (if given) gets how
+    late the frames went out against their deadlines, wall seconds:
+    max, p99 and the count more than 0.1 s late. Returns the count sent;
     SendError when the bus fails."""
     if not msgs:
         return 0
     t0 = msgs[0].timestamp
     w0 = time.perf_counter()
     n = 0
+    late: List[float] = []
     for m in msgs:
         if not fast:
             due = w0 + (m.timestamp - t0) / speed
@@ -179,6 +186,7 @@ def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, f
                 if left <= 0:
                     break
                 time.sleep(min(left, 0.05))
+            late.append(max(0.0, time.perf_counter() - due))
         if stop:
             break
         for attempt in range(200):
@@ -196,6 +204,10 @@ def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, f
             progress.update(n, m.timestamp - t0)
     if progress is not None:
         progress.done(n, msgs[n - 1].timestamp - t0 if n else 0.0)
+    if behind is not None and late:
+        a = np.array(late)
+        behind.update({"max": round(float(a.max()), 3), "p99": round(float(np.percentile(a, 99)), 3),
+                       "over_0.1": int((a > 0.1).sum())})
     return n
 
 
@@ -262,7 +274,10 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
         try:
             with cli.Stop() as stop:
                 try:
-                    report["sent"] = send_all(bus, msgs, a.speed, a.fast, stop, progress)
+                    behind: dict = {}
+                    report["sent"] = send_all(bus, msgs, a.speed, a.fast, stop, progress, behind)
+                    if behind:
+                        report["behind_s"] = behind
                 except SendError as exc:
                     report["sent"] = exc.sent
                     failure = f"the bus failed after {exc.sent} frames: {exc.cause}"

@@ -55,8 +55,11 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
     return float(np.sqrt(np.mean(((we - wt) / wt) ** 2)))
 
 
-def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float, speed: float):
-    """Decoded output series with simulation times."""
+def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float,
+            speed: Optional[float]):
+    """Decoded output series with simulation times. speed: the replay's
+    speed-up (None: 1 for time alignment; measured from the inputs for
+    inputs alignment)."""
     series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
                                HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
@@ -70,18 +73,23 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
-    # For dating by EstTime: simulation time as the bus clock runs, from the
-    # inputs with the least latency (as hstpfd's fix clock does): rate =
-    # the replay's speed-up, lag = the least latency. An estimator steps on
-    # that clock, so an estimate lies near sim_of(its bus time).
+    # For dating by EstTime when nothing else does: simulation seconds per
+    # bus second (the replay's speed-up), the median over consecutive inputs
+    # (stalls and their bursts do not move it). hstpfd runs its predictions
+    # on the receive time less the latest fix's latency, so a prediction
+    # lies near the latest input's time plus the bus time since it, at that rate.
     in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
                        if m.arbitration_id == pos_id and bytes(m.data) in input_map])
-    rate, lag = 1.0, 0.0
-    if len(in_ts) > 10 and np.ptp(in_ts) > 0:
-        rate = float(np.polyfit(in_ts, in_sim, 1)[0])
-        lag = float(np.min(rate * np.array(in_ts) - in_sim))
+    rate = speed if speed is not None else 1.0
+    if speed is None and len(in_ts) > 10:
+        d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
+        ok = (d_ts > 0) & (d_sim > 0)
+        if ok.sum() > 10:
+            rate = float(np.median(d_sim[ok] / d_ts[ok]))
     pos_msg = codec.message(POSITION)
     fix_in: Optional[int] = None  # FixTime of the latest matched input
+    fix_sim: Dict[int, float] = {}  # FixTime -> simulation time of the latest matched input with it
+    prev_est: Optional[Tuple[float, int, float]] = None  # the latest dated estimate: sim time, EstTime, bus time
     pending = None  # an EstState waiting for the EstQuality frame that dates it
     n_dated = 0
 
@@ -102,6 +110,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
                 t_in = m.timestamp
                 p = pos_msg.decode(bytes(m.data), decode_choices=False)
                 fix_in = int(p["FixTime"]) if p.get("FixTimeValid", 0) >= 0.5 else None
+                if fix_in is not None:
+                    fix_sim[fix_in] = t
             continue
         name, sig, res = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if name not in series:
@@ -112,18 +122,31 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         e2e_results[name][res] += 1
         if sig is None:
             continue
-        t = t_sim if align == "inputs" else (m.timestamp - t0) * speed
+        t = t_sim if align == "inputs" else (m.timestamp - t0) * (speed if speed is not None else 1.0)
         if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
                 and t_sim is not None:
-            # the estimate's own time, on the fix clock: the time with that
-            # FixTime nearest to where the bus clock puts it (predict-only
-            # steps may run seconds past inputs that come late; an estimator
-            # may lag): within half a wrap of that
-            expect_ms = (rate * m.timestamp - lag - t_sim) * 1000.0  # how far past the latest input
-            d = (int(sig["EstTime"]) - fix_in - expect_ms) % FIX_TIME_WRAP_MS
-            if d > FIX_TIME_WRAP_MS / 2:
-                d -= FIX_TIME_WRAP_MS
-            t_est = t_sim + (expect_ms + d) / 1000.0
+            # the estimate's own time, on the fix clock. A step on a fix has
+            # that fix's FixTime: the latest recorded input with it dates the
+            # estimate exactly. A predict-only step lies after the estimate
+            # before it (steps never go back) by less than a wrap when the
+            # two are close on the bus. Otherwise (the first estimate, or one
+            # after a long silence of the outputs): from the latest input's
+            # time and the bus time since, below.
+            est_ms = int(sig["EstTime"])
+            t_est = fix_sim.get(est_ms)
+            if t_est is not None and t_sim - t_est > FIX_TIME_WRAP_MS / 2000.0:
+                t_est = None  # that input is more than half a wrap old: another fix's time
+            if t_est is None and prev_est is not None and (m.timestamp - prev_est[2]) * rate < FIX_TIME_WRAP_MS / 2000.0:
+                t_est = prev_est[0] + ((est_ms - prev_est[1]) % FIX_TIME_WRAP_MS) / 1000.0
+            if t_est is None:
+                # hstpfd never predicts past the latest input plus the bus
+                # time since it (a late publication only makes the estimate
+                # older than that): the latest time with that EstTime not
+                # after it, with 0.5 s for the rate's error
+                expect_ms = rate * (m.timestamp - t_in) * 1000.0  # how far past the latest input
+                d = -((expect_ms + 500.0 - (est_ms - fix_in)) % FIX_TIME_WRAP_MS)  # in (-wrap, 0]
+                t_est = t_sim + (expect_ms + 500.0 + d) / 1000.0
+            prev_est = (t_est, est_ms, m.timestamp)
             if pending is not None:
                 series[EST_STATE].append((t_est, pending[2]))
                 n_dated += 1
@@ -390,7 +413,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
     p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
-    p.add_argument("--speed", type=float, default=1.0, help="replay speed-up (time alignment; 1)")
+    p.add_argument("--speed", type=float, default=None,
+                   help="replay speed-up (time alignment: 1; inputs alignment: measured from the inputs, used "
+                        "only to date an estimate after a silence of the outputs)")
     cli.add_json_argument(p, what="the metrics as JSON", default=" (the table then goes to stderr)")
     p.add_argument("--plots", help="write PNG plots into this directory")
     p.add_argument("--config", help="the hstpfd config file of the run: its declare_threshold and declare_hold_s "
@@ -412,7 +437,7 @@ def _main(argv) -> int:
     align = a.align if a.align != "auto" else ("inputs" if a.input_log else "time")
     if align == "inputs" and not a.input_log:
         raise cli.CliError(cli.EXIT_USAGE, "--align inputs needs --input-log")
-    if a.speed <= 0:
+    if a.speed is not None and a.speed <= 0:
         raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
     if [a.log, a.input_log, a.truth].count("-") > 1:
         raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
