@@ -64,6 +64,8 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
 /* The new grid ng = (s0, ds, v0, dv) of model l for this step (with the
  * box tail f->grid.tail); sets f->grid.first/last and vimg. *tot and *rtot:
  * the model's mass and its mass at rest. Uses f->grid.work as scratch. */
+/* grid_box.c: a box's geometry with the narrowest cells allowed */
+void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g);
 void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y,
                          real yr, real *ng, real *tot, real *rtot);
 

@@ -38,19 +38,7 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     }
     v_lo = v_lo > (real)0 ? v_lo : (real)0;
     v_hi = v_hi > v_lo ? v_hi : v_lo;
-    if (s_hi - s_lo < DS_MIN * (real)NS) {
-        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
-        s_hi = s_lo + DS_MIN * (real)NS;
-    }
-    if (v_hi - v_lo < DV_MIN * (real)NV) {
-        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
-        v_lo = v_lo > (real)0 ? v_lo : (real)0;
-        v_hi = v_lo + DV_MIN * (real)NV;
-    }
-    g[0] = s_lo;
-    g[1] = (s_hi - s_lo) / (real)NS;
-    g[2] = v_lo;
-    g[3] = (v_hi - v_lo) / (real)NV;
+    hstpf__grid_geometry(s_lo, s_hi, v_lo, v_hi, g);
     for (i = 0; i < NS; ++i) { /* e2 in [y2 - right edge, y2 - left edge] */
         const real x0 = g[0] + (real)i * g[1], sc_i = x0 + (real)0.5 * g[1];
         const real ps = hstpf__grid_prob_in(&f->de, y2 - (x0 + g[1]), y2 - x0);

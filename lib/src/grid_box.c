@@ -198,6 +198,26 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
                           (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi);
 }
 
+/* The geometry g = (s0, ds, v0, dv) of the box [s_lo, s_hi] x [v_lo,
+ * v_hi], its cells no narrower than DS_MIN and DV_MIN (widened about the
+ * centre, the speeds kept at 0 or above). */
+void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g)
+{
+    if (s_hi - s_lo < DS_MIN * (real)NS) {
+        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
+        s_hi = s_lo + DS_MIN * (real)NS;
+    }
+    if (v_hi - v_lo < DV_MIN * (real)NV) {
+        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
+        v_lo = v_lo > (real)0 ? v_lo : (real)0;
+        v_hi = v_lo + DV_MIN * (real)NV;
+    }
+    g[0] = s_lo;
+    g[1] = (s_hi - s_lo) / (real)NS;
+    g[2] = v_lo;
+    g[3] = (v_hi - v_lo) / (real)NV;
+}
+
 /* Step 1: the new box from the transported support plus the noise
  * quantiles, into ng (s0, ds, v0, dv); sets f->grid.first/last (the
  * occupied cells of each row) and vimg for the transport. A cell is
@@ -280,19 +300,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
         }
     }
     v_lo = v_lo > (real)0 ? v_lo : (real)0; /* a train never reverses: the box starts at 0 at most */
-    if (s_hi - s_lo < DS_MIN * (real)NS) {
-        s_lo = (real)0.5 * (s_lo + s_hi) - (real)0.5 * DS_MIN * (real)NS;
-        s_hi = s_lo + DS_MIN * (real)NS;
-    }
-    if (v_hi - v_lo < DV_MIN * (real)NV) {
-        v_lo = (real)0.5 * (v_lo + v_hi) - (real)0.5 * DV_MIN * (real)NV;
-        v_lo = v_lo > (real)0 ? v_lo : (real)0;
-        v_hi = v_lo + DV_MIN * (real)NV;
-    }
-    ng[0] = s_lo;
-    ng[1] = (s_hi - s_lo) / (real)NS;
-    ng[2] = v_lo;
-    ng[3] = (v_hi - v_lo) / (real)NV;
+    hstpf__grid_geometry(s_lo, s_hi, v_lo, v_hi, ng);
     *tot_out = tot;
     *rtot_out = rtot;
 }

@@ -13,6 +13,7 @@
 
 #include "internal.h" /* hstpf__resample_counts: exposed for tests */
 #include "testutil.h"
+#include "testbuild.h"
 
 static hstpf_t f; /* ~200 kB: static, as on a target */
 static hstpf_theta_t rows[4];
@@ -46,12 +47,7 @@ static double fix_at(double t)
 
 static int32_t step(double dt, double u, double y, int has_y)
 {
-    hstpf_input_t in;
-    memset(&in, 0, sizeof in);
-    in.dt_s = dt;
-    in.traction = u;
-    in.position_m = y;
-    in.has_position = (uint8_t)has_y;
+    const hstpf_input_t in = tu_input(dt, u, y, has_y);
     return hstpf_step(&f, &in);
 }
 
