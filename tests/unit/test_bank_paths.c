@@ -15,6 +15,9 @@
 #include "testutil.h"
 #include "testbuild.h"
 
+/* every engine, for the cases that must hold in each */
+static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
+
 static hstpf_t f; /* ~200 kB: static, as on a target */
 static hstpf_theta_t rows[4];
 
@@ -151,10 +154,9 @@ static void test_band_point_theta(void **state)
  * continuous hypothesis stays off (q_offtable 0, gain 1, no FIT_NONE). */
 static void test_refine_ignored_off_kalman(void **state)
 {
-    static const hstpf_engine_t engines[2] = {HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
     int i;
     (void)state;
-    for (i = 0; i < 2; ++i) {
+    for (i = 1; i < 3; ++i) { /* the particle and grid engines */
         hstpf_config_t c;
         hstpf_estimate_t e;
         base_config(&c, engines[i], 2);
@@ -288,7 +290,6 @@ static void test_resample_no_weight(void **state)
  * older one is replaced, and lock comes from the next pair (docs/model.md). */
 static void test_pending_fix_expires(void **state)
 {
-    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
     int i, k;
     (void)state;
     for (i = 0; i < 3; ++i) {
@@ -324,7 +325,6 @@ static void test_pending_fix_expires(void **state)
  * filter from the first fix. */
 static void test_beyond_ranges_invalid(void **state)
 {
-    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
     int i, k;
     (void)state;
     for (i = 0; i < 3; ++i) {
@@ -376,7 +376,6 @@ static void test_beyond_ranges_invalid(void **state)
  * place it with the blended speed). */
 static void test_lost_model_redrawn(void **state)
 {
-    static const hstpf_engine_t engines[3] = {HSTPF_ENGINE_KALMAN, HSTPF_ENGINE_PARTICLE, HSTPF_ENGINE_GRID};
     int i;
     (void)state;
     for (i = 0; i < 3; ++i) {
