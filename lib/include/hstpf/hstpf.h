@@ -332,7 +332,9 @@ typedef struct {
      *  otherwise: consumers must not use the states, theta or resistance. */
     uint8_t valid;
     /** 1 while the train is held at standstill (docs/model.md): the model
-     *  weights are not updated. */
+     *  weights are not updated. They also wait, with standstill 0, while
+     *  some weighted models hold the train at rest and others still move
+     *  it (its arrival), for at most 10 s. */
     uint8_t standstill;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
