@@ -178,22 +178,24 @@ static void update_model_weights(hstpf_t *f)
     }
 }
 
-/* Every state, variance and log weight finite. x * 0 is 0 for a finite x
- * and NaN for a NaN or an infinity, so one sum tells (no overflow). */
+/* Every state, variance and log weight finite and physically possible:
+ * one sum of their magnitudes, NaN or infinite if any is, and beyond
+ * HSTPF__STATE_MAX when a state ran away while still finite (the blend of
+ * a huge double state would publish infinity; fuzz regression). */
 static int finite_models(const hstpf_t *f)
 {
-    double z = 0.0;
+    double z = fabs(f->rf.logq);
     uint16_t l;
     int i;
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        z += (double)m->s_mean * 0.0 + (double)m->v_mean * 0.0 + (double)m->s_var * 0.0 +
-             (double)m->v_var * 0.0 + m->logq * 0.0;
+        z += fabs((double)m->s_mean) + fabs((double)m->v_mean) + fabs((double)m->s_var) +
+             fabs((double)m->v_var) + fabs(m->logq);
     }
     for (i = 0; i < HSTPF_REFINE_NZ; ++i) { /* zero while the hypothesis is off */
-        z += f->rf.kz[i] * 0.0 + f->rf.kp[i * (HSTPF_REFINE_NZ + 1)] * 0.0;
+        z += fabs(f->rf.kz[i]) + fabs(f->rf.kp[i * (HSTPF_REFINE_NZ + 1)]);
     }
-    return z + f->rf.logq * 0.0 == 0.0;
+    return z <= HSTPF__STATE_MAX;
 }
 
 /* Standstill: every model that carries weight is held at rest. The data

@@ -10,6 +10,10 @@
  * which the weights wait, s: braking from the speeds where the models
  * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
 #define HSTPF__ARRIVAL_MAX_S 10.0
+/* Largest sum of state magnitudes (m, m/s, their variances, log weights)
+ * a working filter can hold: positions are re-based within 1 km, speeds
+ * below 200 m/s, variances bounded by max_gap_s; beyond, it ran away */
+#define HSTPF__STATE_MAX 1e15
 #define HSTPF_G_ACC 9.81        /* m/s^2 */
 
 /* The full range check of a configuration (config.c); *field names the
