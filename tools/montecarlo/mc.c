@@ -188,6 +188,13 @@ static double tv_dist(const double *a, const hstpf_estimate_t *e, int n)
     return 0.5 * acc;
 }
 
+/* A bank index as an index of w->models: with the truth's row left out
+ * (scenario absent) the rows after it moved down by one; -1 stays -1. */
+static int table_index(const work_t *w, int truth, int b)
+{
+    return b < 0 ? -1 : (w->sc->absent && b >= truth ? b + 1 : b);
+}
+
 static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
 {
     static const double thr = 0.9;
@@ -350,7 +357,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         (void)hstpf_estimate(f, &est);
         have_fix |= in.has_position;
         jr->assert_fail += !decl_consistent(&est, cfg.models, cfg.n_models);
-        decl = est.declared < 0 ? -1 : (w->sc->absent && est.declared >= truth ? est.declared + 1 : est.declared);
+        decl = table_index(w, truth, est.declared);
         if (have_fix) {
             const double ep = est.position_m - smp.s, ev = (double)est.speed_mps - smp.v;
             jr->cover_p += fabs(ep) <= 1.96 * est.position_sd_m;
@@ -445,7 +452,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->q_true_end = tq >= 0 ? (double)est.model[tq].q : 0.0;
     r->success = r->q_true_end > thr;
     r->t_cross = r->success ? last_below + 1.0 : -1.0;
-    r->final_declared = est.declared < 0 ? -1 : (w->sc->absent && est.declared >= truth ? est.declared + 1 : est.declared);
+    r->final_declared = table_index(w, truth, est.declared);
     {
         const double th[3] = {(double)est.theta[0], (double)est.theta[1], (double)est.theta[2]};
         r->par_err[0] = fabs(th[0] - sc.truth.c0) / sc.truth.c0;
