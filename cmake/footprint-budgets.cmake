@@ -4,17 +4,26 @@
 # why), not an accident. Each is the value measured when it was set plus a
 # margin of about 10 % (docs/footprint.md has the measurements).
 
-# libhstpf.a flash (code + rodata + data, all objects), bytes; 58 120 measured
+# libhstpf.a flash (code + rodata + data, all objects), bytes; 59 544 measured
 set(HSTPF_BUDGET_FLASH 64000)
 # libhstpf.a static RAM (data + bss), bytes: the library keeps no state
 set(HSTPF_BUDGET_LIB_RAM 0)
-# sizeof(hstpf_t) per capacity (models x particles; grid 48 x 48), bytes.
-# One layout serves every engine today: the grid cells and the particles
-# are both inside the instance (docs/footprint.md, "Instance size").
-set(HSTPF_BUDGET_INSTANCE_3x100 78000)    # 70 864 measured
-set(HSTPF_BUDGET_INSTANCE_17x100 244000)  # 221 784
-set(HSTPF_BUDGET_INSTANCE_17x256 282000)  # 255 792 (library default)
-set(HSTPF_BUDGET_INSTANCE_17x1000 460000) # 417 984
+# An instance per engine and capacity (models x particles; grid 48 x 48),
+# bytes: sizeof(hstpf_t) plus the workspace that engine needs at those
+# capacities (HSTPF_PARTICLE_WS_BYTES, HSTPF_GRID_WS_BYTES; the Kalman
+# engine needs none). docs/footprint.md, "Instance size".
+set(HSTPF_BUDGET_KALMAN_3x100 21000)       # 19 064 measured
+set(HSTPF_BUDGET_KALMAN_17x100 23800)      # 21 584
+set(HSTPF_BUDGET_KALMAN_17x256 23800)      # 21 584 (library default)
+set(HSTPF_BUDGET_KALMAN_17x1000 23800)     # 21 584
+set(HSTPF_BUDGET_PARTICLE_3x100 26500)     # 24 064
+set(HSTPF_BUDGET_PARTICLE_17x100 47700)    # 43 384
+set(HSTPF_BUDGET_PARTICLE_17x256 85100)    # 77 392
+set(HSTPF_BUDGET_PARTICLE_17x1000 263500)  # 239 584
+set(HSTPF_BUDGET_GRID_3x100 72500)         # 65 928
+set(HSTPF_BUDGET_GRID_17x100 220000)       # 200 160
+set(HSTPF_BUDGET_GRID_17x256 220000)       # 200 160
+set(HSTPF_BUDGET_GRID_17x1000 220000)      # 200 160
 # worst-case stack inside the library (GCC call graph, without libm), bytes
 set(HSTPF_BUDGET_STACK_STEP 1200)     # 1 096
 set(HSTPF_BUDGET_STACK_INIT 880)      # 784
@@ -24,3 +33,4 @@ set(HSTPF_BUDGET_STACK_STEP_MEASURED 1240) # 1 112
 # instructions on the target (QEMU -icount), Case 1, 3 models
 set(HSTPF_BUDGET_INSTR_PARTICLE_STEP 520)  # 471.0 per particle-step
 set(HSTPF_BUDGET_INSTR_KALMAN_MODEL 48500) # 44 013 per model-step
+set(HSTPF_BUDGET_INSTR_GRID_MODEL 1300000) # 1 182 036 per model-step (48 x 48)

@@ -3,6 +3,7 @@
  * declare.c's, the published estimate estimate.c's; how each model's state
  * and likelihood are computed is the engine's (engine.h). */
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "bank.h"
@@ -21,13 +22,32 @@ hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg)
 }
 
 /* The one place an engine is chosen. */
-const hstpf__engine_t *hstpf__engine_of(const hstpf_t *f)
+const hstpf__engine_t *hstpf__engine_for(hstpf_engine_t e)
 {
-    switch ((hstpf_engine_t)f->engine) {
+    switch (e) {
     case HSTPF_ENGINE_KALMAN: return &hstpf__engine_kalman;
     case HSTPF_ENGINE_GRID: return &hstpf__engine_grid;
     default: return &hstpf__engine_particle;
     }
+}
+
+const hstpf__engine_t *hstpf__engine_of(const hstpf_t *f)
+{
+    return hstpf__engine_for((hstpf_engine_t)f->engine);
+}
+
+int32_t hstpf_workspace_size(const hstpf_config_t *cfg, size_t *bytes)
+{
+    int32_t err;
+    if (cfg == NULL || bytes == NULL) {
+        return HSTPF_E_NULL;
+    }
+    err = hstpf__config_check(cfg, NULL);
+    if (err != HSTPF_OK) {
+        return err;
+    }
+    *bytes = hstpf__engine_for(hstpf__engine_resolve(cfg))->ws_bytes(cfg);
+    return HSTPF_OK;
 }
 
 static void reset_state(hstpf_t *f)
@@ -95,6 +115,8 @@ static void init_tables(hstpf_t *f, const hstpf_config_t *cfg)
 
 int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
 {
+    const hstpf__engine_t *eng;
+    size_t need;
     int32_t err;
     uint16_t l;
     if (f == NULL || cfg == NULL) {
@@ -107,10 +129,22 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     if (err != HSTPF_OK) {
         return err;
     }
+    eng = hstpf__engine_for(hstpf__engine_resolve(cfg));
+    need = eng->ws_bytes(cfg);
+    if (need > 0 && cfg->workspace == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (need > 0 && (cfg->workspace_size < need || (uintptr_t)cfg->workspace % HSTPF_WORKSPACE_ALIGN != 0)) {
+        return HSTPF_E_SIZE;
+    }
     memset(f, 0, sizeof *f);
     f->cfg = *cfg;
     f->cfg.models = NULL; /* copied below: the caller's arrays need not live on */
     f->cfg.track = NULL;
+    if (need > 0) {
+        memset(cfg->workspace, 0, need); /* runs repeat bit for bit whatever was there */
+        eng->attach(f, cfg->workspace);
+    }
     f->xi = HSTPF_G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
     f->engine = (uint8_t)hstpf__engine_resolve(cfg);
     f->rf.active = (uint8_t)(cfg->refine && cfg->refine_prior_q > 0.0 &&

@@ -53,6 +53,10 @@ typedef struct {
     void (*after_weights)(hstpf_t *f, const hstpf__step_t *st);
     /* Positions move by -d: the origin moved by +d. */
     void (*shift)(hstpf_t *f, hstpf_real_t d);
+    /* Bytes of workspace a validated configuration needs (0: none). */
+    size_t (*ws_bytes)(const hstpf_config_t *c);
+    /* Points the instance's arrays into ws (ws_bytes long, aligned). */
+    void (*attach)(hstpf_t *f, void *ws);
 } hstpf__engine_t;
 
 extern const hstpf__engine_t hstpf__engine_particle;
@@ -61,6 +65,9 @@ extern const hstpf__engine_t hstpf__engine_grid;
 
 /* The engine of a validated configuration (AUTO resolved). */
 hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg);
+
+/* The interface of an engine (never AUTO). */
+const hstpf__engine_t *hstpf__engine_for(hstpf_engine_t e);
 
 /* The interface of an instance's resolved engine. */
 const hstpf__engine_t *hstpf__engine_of(const hstpf_t *f);

@@ -218,4 +218,25 @@ static void shift(hstpf_t *f, real d)
     }
 }
 
-const hstpf__engine_t hstpf__engine_grid = {place_all, hstpf__grid_place_one, predict_update, NULL, shift};
+static size_t ws_bytes(const hstpf_config_t *c)
+{
+    return HSTPF_GRID_WS_BYTES(c->n_models);
+}
+
+/* The layout HSTPF_GRID_WS_BYTES counts: each model's cells, the
+ * transported grid, the saved cells, each model's mass at rest. */
+static void attach(hstpf_t *f, void *ws)
+{
+    const size_t nm = f->cfg.n_models;
+    real *r = (real *)ws;
+    f->grid.p = (real(*)[NS * NV])(void *)r;
+    r += nm * NS * NV;
+    f->grid.work = r;
+    r += NS * NV;
+    f->grid.save = r;
+    r += NS * NV + NS + 4;
+    f->grid.rest = (real(*)[NS])(void *)r;
+}
+
+const hstpf__engine_t hstpf__engine_grid = {place_all, hstpf__grid_place_one, predict_update, NULL, shift, ws_bytes,
+                                             attach};

@@ -161,4 +161,17 @@ static void shift(hstpf_t *f, real d)
     }
 }
 
-const hstpf__engine_t hstpf__engine_kalman = {place_all, place_one, predict_update, NULL, shift};
+/* The state is in hstpf_model_t: no workspace. */
+static size_t ws_bytes(const hstpf_config_t *c)
+{
+    (void)c;
+    return 0;
+}
+
+static void attach(hstpf_t *f, void *ws)
+{
+    (void)f;
+    (void)ws;
+}
+
+const hstpf__engine_t hstpf__engine_kalman = {place_all, place_one, predict_update, NULL, shift, ws_bytes, attach};

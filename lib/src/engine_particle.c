@@ -411,7 +411,32 @@ static void shift(hstpf_t *f, real d)
     }
 }
 
-const hstpf__engine_t hstpf__engine_particle = {place_all, place_one, predict_update, after_weights, shift};
+static size_t ws_bytes(const hstpf_config_t *c)
+{
+    return HSTPF_PARTICLE_WS_BYTES(c->n_models, c->n_particles);
+}
+
+/* The layout HSTPF_PARTICLE_WS_BYTES counts: s, v, lw of each model, then
+ * scratch, nz_s, nz_v and the counts. */
+static void attach(hstpf_t *f, void *ws)
+{
+    const uint16_t n = f->cfg.n_particles;
+    real *r = (real *)ws;
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        f->m[l].s = r;
+        f->m[l].v = r + n;
+        f->m[l].lw = r + 2 * n;
+        r += 3 * n;
+    }
+    f->scratch = r;
+    f->nz_s = r + n;
+    f->nz_v = r + 2 * n;
+    f->counts = (uint16_t *)(void *)(r + 3 * n);
+}
+
+const hstpf__engine_t hstpf__engine_particle = {place_all,    place_one, predict_update, after_weights,
+                                                 shift,        ws_bytes,  attach};
 
 int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s, hstpf_real_t *v, hstpf_real_t *w)
 {

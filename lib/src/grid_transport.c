@@ -66,7 +66,7 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
     const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1; /* < 0: the rest mass is held */
     real held = 0;
     int i, j;
-    memset(w, 0, sizeof f->grid.work);
+    memset(w, 0, sizeof(real) * NS * NV);
     memset(f->grid.rnew, 0, sizeof f->grid.rnew);
     memset(f->grid.rpend, 0, sizeof f->grid.rpend);
     box[0] = NV; /* rows, then columns, of work that receive mass */

@@ -6,7 +6,6 @@ int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size)
     hstpf_config_t fc;
     hstpfd_sched_t s;
     int32_t rc;
-    static hstpf_t probe; /* about 100 kB: not on the stack */
     if ((c->iface[0] != '\0') == (c->log[0] != '\0')) {
         hstpfd__fail(err, err_size, "give exactly one source: --iface IFACE or --log FILE");
         return -1;
@@ -18,7 +17,7 @@ int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size)
         return -1;
     }
     hstpfd_config_filter(c, &fc);
-    rc = hstpf_init(&probe, sizeof probe, &fc);
+    rc = hstpf_config_check(&fc, NULL); /* hstpf_init's check; the core owns the workspace */
     if (rc != HSTPF_OK) {
         hstpfd__fail(err, err_size, "the estimator rejects the configuration: %s (%ld)", hstpf_strerror(rc), (long)rc);
         return -1;

@@ -27,6 +27,8 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
     c->frames_out = frames_out;
     (void)snprintf(c->bus, sizeof c->bus, "%s", bus != NULL ? bus : "can0");
     hstpfd_config_filter(cfg, &fc);
+    fc.workspace = c->ws;
+    fc.workspace_size = sizeof c->ws;
     rc = hstpf_init(filt, sizeof *filt, &fc);
     if (rc != HSTPF_OK) {
         return rc;

@@ -76,6 +76,9 @@ typedef struct {
     int64_t decision_t;    /* frame time of the step that declared the current type */
     uint32_t floor_prev[HSTPF_MAX_MODELS];
     hstpfd_counts_t n;
+    /* the estimator's workspace: the engine comes from the configuration
+     * file, so room for any (uint64_t: HSTPF_WORKSPACE_ALIGN) */
+    uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
 } hstpfd_core_t;
 
 /* Initialises the core and the estimator *filt (caller-owned, static).

@@ -11,6 +11,7 @@
 #include "hstpf/hstpf.h"
 
 static hstpf_t filt;
+static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
 static hstpf_theta_t models[HSTPF_MAX_MODELS];
 static double tx[8], tp[8];
 
@@ -141,6 +142,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.model_reacquire_after = fuzz_u8(&in);
         cfg.e_blur_sd = fuzz_double(&in, 0.0, 1.0);
     }
+    cfg.workspace = ws; /* the fuzzed counts and engine need at most this */
+    cfg.workspace_size = sizeof ws;
     rc = hstpf_init(&filt, sizeof filt, &cfg);
     FUZZ_CHECK(known_error(rc), "hstpf_init returned %d", (int)rc);
     {

@@ -19,6 +19,7 @@ static double cpu_s(void)
 
 static hstpf_dist_t d;
 static hstpf_t filt;
+static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
 static double tx[HSTPF_DIST_TABLE_MAX], tp[HSTPF_DIST_TABLE_MAX];
 
 int main(void)
@@ -94,6 +95,8 @@ int main(void)
         c.noise_e = s;
         c.e_blur_sd = 1.0;
         t0 = cpu_s();
+        c.workspace = ws;
+        c.workspace_size = sizeof ws;
         if (hstpf_init(&filt, sizeof filt, &c) != HSTPF_OK) {
             return 1;
         }

@@ -30,6 +30,7 @@
 #define N_PARTICLES 50
 
 static hstpf_t filt;
+static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
 
 static uint64_t sm_state = UINT64_C(20240601);
 
@@ -82,6 +83,8 @@ int main(void)
     cfg.noise_v.sd = sd_v;
     cfg.noise_e.sd = sd_e;
     cfg.init_speed_sd = 0.5;
+    cfg.workspace = ws;
+    cfg.workspace_size = sizeof ws;
     err = hstpf_init(&filt, sizeof filt, &cfg);
     if (err != HSTPF_OK) {
         fprintf(stderr, "hstpf_init: %s\n", hstpf_strerror(err));

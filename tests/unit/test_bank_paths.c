@@ -105,12 +105,14 @@ static void test_refusals(void **state)
     c.n_track = 1;
     assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_RANGE);
     assert_string_equal(field, "track.curve_radius_m");
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_E_RANGE);
     seg[0].curve_radius_m = 1e7; /* the edge is in range */
     assert_int_equal(hstpf_config_check(&c, &field), HSTPF_OK);
     assert_string_equal(field, "");
 
     /* good data after the refusals: it runs */
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     (void)run_fixes(0.0, 20);
     e = est();
@@ -162,6 +164,7 @@ static void test_refine_ignored_off_kalman(void **state)
         base_config(&c, engines[i], 2);
         c.refine = 1;
         c.refine_prior_q = 0.4;
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         (void)run_fixes(0.0, 30);
         e = est();
@@ -184,6 +187,7 @@ static void test_declare_hold_zero(void **state)
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
     c.declare_hold_s = 0.0;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     for (k = 0; k < 600; ++k) {
         hstpf_estimate_t e;
@@ -215,6 +219,7 @@ static void test_q_floor_top(void **state)
     c.refine_prior_q = 0.5;
     c.q_floor = 0.6;
     c.withdraw_threshold = 0.6;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     for (k = 0; k < 60; ++k) {
         hstpf_estimate_t e;
@@ -258,11 +263,13 @@ static void test_roughening_off(void **state)
         c.roughening_k = 0.0;
         c.rough_min_s = 0.0;
         c.rough_min_v = 0.0;
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         (void)run_fixes(0.0, 10);
         assert_true(distinct_positions() < 100);
         assert_true(est().valid);
         c.roughening_k = 0.2;
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         (void)run_fixes(0.0, 10);
         assert_int_equal(distinct_positions(), 100);
@@ -296,6 +303,7 @@ static void test_pending_fix_expires(void **state)
         hstpf_config_t c;
         hstpf_estimate_t e;
         base_config(&c, engines[i], 2);
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
         for (k = 1; k <= 31; ++k) { /* 31 s without a fix: beyond max_gap_s = 30 */
@@ -334,6 +342,7 @@ static void test_beyond_ranges_invalid(void **state)
         c.init_speed_mps = 100.0;
         c.init_speed_sd = 1.0;
         /* position: 500 m short of the limit at 100 m/s, held (u = W) */
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         assert_int_equal(step(1.0, 0.0, HSTPF_POS_MAX_M - 500.0, 1), HSTPF_OK);
         e = est();
@@ -350,6 +359,7 @@ static void test_beyond_ranges_invalid(void **state)
             }
         }
         /* speed: full traction, about 9 m/s^2, passes 200 m/s within 15 s */
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         assert_int_equal(step(1.0, 0.0, 1000.0, 1), HSTPF_OK);
         for (k = 1; k <= 20; ++k) {
@@ -387,6 +397,7 @@ static void test_lost_model_redrawn(void **state)
         rows[1].c2 = 0.01;
         c.model_reacquire_after = 2;
         c.q_floor = 1e-6;
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
         (void)run_fixes(0.0, 120);
         e = est();
@@ -417,6 +428,7 @@ static void test_grid_tiny_noise(void **state)
     c.noise_s.sd = 1e-3;
     c.noise_v.sd = 1e-3;
     c.noise_e.sd = 1e-3;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     for (k = 0; k <= 30; ++k) {
         assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE * k, 1), HSTPF_OK);
@@ -447,6 +459,7 @@ static void test_grid_slow_redraw(void **state)
     c.noise_e.sd = 0.05;
     c.model_reacquire_after = 2;
     c.q_floor = 1e-6;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     for (k = 0; k <= 120; ++k) {
         const double u = hstpf_resistance(&rows[0], 2.0);
@@ -481,6 +494,7 @@ static void test_grid_standing_redraw(void **state)
     c.noise_e.sd = 0.05;
     c.model_reacquire_after = 2;
     c.q_floor = 1e-6;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     for (k = 0; k <= 180; ++k) {
         assert_int_equal(step(1.0, 40.0, Y0 + 0.02 * sin(1.7 * k), 1), HSTPF_OK);
@@ -537,6 +551,7 @@ static void test_validity_injected(void **state)
     int i;
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     (void)run_fixes(0.0, 10);
     good = f;
@@ -568,6 +583,7 @@ static void test_nonfinite_paths(void **state)
     hstpf_estimate_t e;
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
     (void)run_fixes(0.0, 30);
     e = est();

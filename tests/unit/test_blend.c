@@ -41,6 +41,7 @@ static void test_long_run_blend(void **state)
         cfg.noise_v = sc.noise_v;
         cfg.noise_e = sc.noise_e;
         cfg.seed = 1000u + seed;
+        tu_workspace(&cfg, 0);
         assert_int_equal(hstpf_init(&filt, sizeof filt, &cfg), HSTPF_OK);
         hstpf_sim_init(&sim, &sc);
         while (sim.t <= 3600.0) {

@@ -110,6 +110,7 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
      * they act on the particle engine only */
     cfg.e_blur_sd = 0.2;
     cfg.roughening_k = 0.7;
+    tu_workspace(&cfg, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &cfg), HSTPF_OK);
     hstpf_sim_init(&sim, &sc);
 

@@ -21,6 +21,30 @@ static void good_config(hstpf_config_t *c)
     c->n_particles = 40;
     c->seed = 77;
     c->engine = HSTPF_ENGINE_PARTICLE; /* hstpf_particles() needs particles */
+    tu_workspace(c, 2);                /* the twins take 0 and 1 */
+}
+
+/* A and B hold the same state: the instances but for their workspace
+ * pointers, and the particles in their workspaces. */
+static int twins_equal(void)
+{
+    static hstpf_t a, b;
+    const size_t ws = HSTPF_PARTICLE_WS_BYTES(f_a.cfg.n_models, f_a.cfg.n_particles);
+    hstpf_t *const ab[2] = {&a, &b};
+    int k, l;
+    a = f_a;
+    b = f_b;
+    for (k = 0; k < 2; ++k) {
+        hstpf_t *x = ab[k];
+        x->cfg.workspace = NULL;
+        for (l = 0; l < HSTPF_MAX_MODELS; ++l) {
+            x->m[l].s = x->m[l].v = x->m[l].lw = NULL;
+        }
+        x->scratch = x->nz_s = x->nz_v = NULL;
+        x->counts = NULL;
+    }
+    return memcmp(&a, &b, sizeof a) == 0 && f_a.cfg.workspace != f_b.cfg.workspace &&
+           memcmp(f_a.cfg.workspace, f_b.cfg.workspace, ws) == 0;
 }
 
 static void good_step(hstpf_t *f, double y)
@@ -35,14 +59,17 @@ static void good_step(hstpf_t *f, double y)
 /* A (and its twin B) initialised and run for a few steps. */
 static void make_twins(const hstpf_config_t *c)
 {
+    hstpf_config_t cw = *c;
     int k;
-    assert_int_equal(hstpf_init(&f_a, sizeof f_a, c), HSTPF_OK);
-    assert_int_equal(hstpf_init(&f_b, sizeof f_b, c), HSTPF_OK);
+    tu_workspace(&cw, 0);
+    assert_int_equal(hstpf_init(&f_a, sizeof f_a, &cw), HSTPF_OK);
+    tu_workspace(&cw, 1);
+    assert_int_equal(hstpf_init(&f_b, sizeof f_b, &cw), HSTPF_OK);
     for (k = 0; k < 5; ++k) {
         good_step(&f_a, 100.0 + 2.0 * k);
         good_step(&f_b, 100.0 + 2.0 * k);
     }
-    assert_memory_equal(&f_a, &f_b, sizeof f_a);
+    assert_true(twins_equal());
 }
 
 /* ---- hstpf_init ---------------------------------------------------------- */
@@ -103,6 +130,12 @@ static void test_init_errors(void **state)
     assert_memory_equal(&f_a, &f_copy, sizeof f_a);
 
     BAD(bc_.models = NULL, HSTPF_E_NULL);
+    /* the workspace: missing, one byte short, misaligned */
+    BAD(bc_.workspace = NULL, HSTPF_E_NULL);
+    BAD(bc_.workspace_size = HSTPF_PARTICLE_WS_BYTES(3, 40) - 1u, HSTPF_E_SIZE);
+    BAD(bc_.workspace_size = HSTPF_PARTICLE_WS_BYTES(3, 40), HSTPF_OK);
+    BAD((bc_.workspace = (unsigned char *)bc_.workspace + 4, bc_.workspace_size -= 8u), HSTPF_E_SIZE);
+    BAD((bc_.engine = HSTPF_ENGINE_KALMAN, bc_.workspace = NULL, bc_.workspace_size = 0), HSTPF_OK);
     BAD((bc_.track = NULL, bc_.n_track = 1), HSTPF_E_NULL);
     /* sizes */
     BAD(bc_.n_models = 0, HSTPF_E_SIZE);
@@ -236,7 +269,7 @@ static void test_init_errors(void **state)
     /* after all that, A still steps exactly like its twin */
     good_step(&f_a, 110.0);
     good_step(&f_b, 110.0);
-    assert_memory_equal(&f_a, &f_b, sizeof f_a);
+    assert_true(twins_equal());
 }
 
 /* ---- hstpf_step ---------------------------------------------------------- */
@@ -245,19 +278,22 @@ static void test_init_errors(void **state)
  * gives identical instances. */
 static void expect_step(const hstpf_input_t *in, int32_t want, const char *what, double y_next)
 {
+    static unsigned char ws_copy[HSTPF_WORKSPACE_MAX_BYTES];
+    const size_t ws = HSTPF_PARTICLE_WS_BYTES(f_a.cfg.n_models, f_a.cfg.n_particles);
     int32_t got;
     f_copy = f_a;
+    memcpy(ws_copy, f_a.cfg.workspace, ws);
     got = hstpf_step(&f_a, in);
     if (got != want) {
         fail_msg("%s: hstpf_step returned %d (%s), expected %d (%s)", what, got, hstpf_strerror(got), want,
                  hstpf_strerror(want));
     }
-    if (memcmp(&f_a, &f_copy, sizeof f_a) != 0) {
-        fail_msg("%s: instance changed by a failing hstpf_step", what);
+    if (memcmp(&f_a, &f_copy, sizeof f_a) != 0 || memcmp(f_a.cfg.workspace, ws_copy, ws) != 0) {
+        fail_msg("%s: instance or workspace changed by a failing hstpf_step", what);
     }
     good_step(&f_a, y_next);
     good_step(&f_b, y_next);
-    if (memcmp(&f_a, &f_b, sizeof f_a) != 0) {
+    if (!twins_equal()) {
         fail_msg("%s: the next good step differs from the twin's", what);
     }
 }
@@ -319,7 +355,7 @@ static void test_step_errors(void **state)
     in = tu_input(1.0, 0.0, nan, 0);
     assert_int_equal(hstpf_step(&f_a, &in), HSTPF_OK);
     assert_int_equal(hstpf_step(&f_b, &in), HSTPF_OK);
-    assert_memory_equal(&f_a, &f_b, sizeof f_a);
+    assert_true(twins_equal());
     y += 2.0; /* the predicted step */
     /* limits that are accepted */
     in = tu_input(HSTPF_DT_MAX_S, HSTPF_U_MAX, y += 2.0, 0);
@@ -342,7 +378,9 @@ static void test_step_errors_before_fix(void **state)
     hstpf_input_t in;
     (void)state;
     good_config(&good);
+    tu_workspace(&good, 0);
     assert_int_equal(hstpf_init(&f_a, sizeof f_a, &good), HSTPF_OK);
+    tu_workspace(&good, 1);
     assert_int_equal(hstpf_init(&f_b, sizeof f_b, &good), HSTPF_OK);
     in = tu_input(NAN, 0.0, 10.0, 1);
     expect_step(&in, HSTPF_E_NONFINITE, "before the fix: dt NaN", 10.0);
@@ -568,10 +606,49 @@ static void test_train_types(void **state)
     TU_CLOSE(hstpf_train_types[6].c2, 0.000426, 0.0);
 }
 
+/* ---- hstpf_workspace_size ------------------------------------------------ */
+
+/* The sizes the engines ask for, counted by hand from their layouts. */
+static void test_workspace_size(void **state)
+{
+    const size_t r = sizeof(hstpf_real_t);
+    hstpf_config_t c;
+    size_t n = 1;
+    (void)state;
+    good_config(&c); /* 3 models, 40 particles */
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
+    /* s, v, lw of 3 models and scratch, nz_s, nz_v: 12 x 40 reals; 40 counts */
+    assert_true(n == ((12u * 40u * r + 80u + 7u) / 8u) * 8u);
+    assert_true(n == HSTPF_PARTICLE_WS_BYTES(3, 40));
+    c.engine = HSTPF_ENGINE_GRID; /* 3 + 2 grids of cells, 3 + 1 rows of rest, 4 */
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
+    assert_true(n == ((r * (5u * HSTPF_GRID_NS * HSTPF_GRID_NV + 4u * HSTPF_GRID_NS + 4u) + 7u) / 8u) * 8u);
+    assert_true(n <= HSTPF_WORKSPACE_MAX_BYTES);
+    c.engine = HSTPF_ENGINE_KALMAN;
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
+    assert_true(n == 0u);
+    c.engine = HSTPF_ENGINE_AUTO; /* Gaussian: Kalman */
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
+    assert_true(n == 0u);
+    c.noise_e.kind = HSTPF_DIST_GAMMA; /* not: the grid */
+    c.noise_e.shape = 0.5;
+    c.noise_e.scale = 2.0;
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
+    assert_true(n == HSTPF_GRID_WS_BYTES(3));
+    /* errors: those of the configuration, and NULL; n untouched */
+    n = 7;
+    c.n_models = 0;
+    assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_E_SIZE);
+    assert_int_equal(hstpf_workspace_size(NULL, &n), HSTPF_E_NULL);
+    assert_int_equal(hstpf_workspace_size(&c, NULL), HSTPF_E_NULL);
+    assert_true(n == 7u);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_init_errors),
+        cmocka_unit_test(test_workspace_size),
         cmocka_unit_test(test_step_errors),
         cmocka_unit_test(test_step_errors_before_fix),
         cmocka_unit_test(test_outlier_gate),

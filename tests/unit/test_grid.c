@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define XI (9.81 / 1.06 / 1000.0)
@@ -113,8 +114,10 @@ static void test_gaussian_vs_kalman(void **state)
     int k, n = 0, floored = 0;
     (void)state;
     setup(1, 1, &sc, &c, m);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 1);
     assert_int_equal(hstpf_init(&fb, sizeof fb, &c), HSTPF_OK);
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k <= 1800; ++k) {
@@ -186,8 +189,10 @@ static void test_track_vs_kalman(void **state)
     sc.n_track = (uint16_t)(sizeof track / sizeof track[0]);
     c.track = track;
     c.n_track = sc.n_track;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 1);
     assert_int_equal(hstpf_init(&fb, sizeof fb, &c), HSTPF_OK);
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k <= 900; ++k) {
@@ -293,6 +298,7 @@ static void test_case2_vs_particle_reference(void **state)
     int k, l, run;
     (void)state;
     setup(2, 3, &sc, &c, m);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k <= REF_STEPS; ++k) {
@@ -372,8 +378,10 @@ static void test_deterministic(void **state)
     (void)state;
     setup(2, 5, &sc, &c, m);
     c.seed = 1;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     c.seed = 987654321;
+    tu_workspace(&c, 1);
     assert_int_equal(hstpf_init(&fb, sizeof fb, &c), HSTPF_OK);
     run_case(&fa, &c, 2, 5, 400, 0, a);
     run_case(&fb, &c, 2, 5, 400, 0, b);
@@ -404,6 +412,7 @@ static void test_mass_and_sign(void **state)
     (void)state;
     for (cs = 1; cs <= 2; ++cs) {
         setup(cs, 11, &sc, &c, m);
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
         run_case(&fa, &c, cs, 11, 600, 1, NULL);
     }
@@ -425,6 +434,7 @@ static void test_extremes(void **state)
     c.noise_e.table_x = tx;
     c.noise_e.table_p = tp;
     c.noise_e.table_n = 4;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     memset(&in, 0, sizeof in);
     for (k = 0; k < 300; ++k) {
@@ -477,6 +487,7 @@ static void test_standstill(void **state)
     uint16_t l;
     (void)state;
     config_unit_noise(&c, m);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     constant_run(&fa, 0.0, 60, 3, &e0);
     constant_run(&fa, 0.0, 60, 4, &e1);
@@ -501,6 +512,7 @@ static void test_acquire_300(void **state)
     uint16_t l;
     (void)state;
     config_unit_noise(&c, m);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     constant_run(&fa, v, 30, 5, &e);
     for (l = 0; l < 3; ++l) {

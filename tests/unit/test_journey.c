@@ -105,6 +105,7 @@ static void held_train(hstpf_engine_t engine)
     int k, stopped = 0, standstill_steps = 0;
     double sd_prev = HUGE_VAL;
     config(&c, engine);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 1000.0, 0.0, 11);
     memset(&at_stop, 0, sizeof at_stop);
@@ -166,6 +167,7 @@ static void start_at_speed(hstpf_engine_t engine)
     hstpf_estimate_t e;
     int k;
     config(&c, engine);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 5.0e6, 300.0 / 3.6, 12);
     for (k = 0; k < 120; ++k) {
@@ -208,6 +210,7 @@ static void clock_steps(hstpf_engine_t engine)
     hstpf_estimate_t e, before;
     int k;
     config(&c, engine);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 0.0, 250.0 / 3.6, 13);
     for (k = 0; k < 200; ++k) {
@@ -263,6 +266,7 @@ static void test_held_but_moving(void **state)
     int k, invalid_steps = 0, k_reacquired = -1;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 0.0, 0.0, 16);
     for (k = 0; k < 200; ++k) {
@@ -294,6 +298,7 @@ static void test_outage_sd_grows(void **state)
     double sd_prev = 0.0;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 0.0, 0.0, 14);
     for (k = 0; k < 300; ++k) {
@@ -347,6 +352,7 @@ static void test_declaration_states(void **state)
     c.noise_s.sd = c.noise_v.sd = 1e-6;
     c.withdraw_threshold = 0.001;
     c.refine = 0; /* the weights are set by hand on the two rows */
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     run_s(5, &y);
     assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
@@ -395,6 +401,7 @@ static void test_nonfinite_reset(void **state)
     int k;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 0.0, 50.0, 15);
     for (k = 0; k < 40; ++k) {
@@ -439,6 +446,7 @@ static void test_arrival_waits(void **state)
     c.models = two;
     c.n_models = 2;
     c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 500.0, 2.0, 21);
     t.sd_s = 0.0; /* a smooth roll, so the truth itself keeps moving */

@@ -125,6 +125,7 @@ static void test_step(void **state)
     int l;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(1.0, 0.0, 1000.0, 1);
     step(0.8, 20.0, 1041.7, 1);
@@ -185,6 +186,7 @@ static void test_no_reversal(void **state)
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
     c.init_speed_mps = 1.0;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(1.0, 0.0, 500.0, 1);
     step(1.0, -200.0, 501.0, 1);
@@ -213,6 +215,7 @@ static void test_outlier(void **state)
     double S, zf, inn, z, ll;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(1.0, 0.0, 1000.0, 1);
     k.x[0] = 1000.0;
@@ -251,25 +254,31 @@ static void test_engine_choice(void **state)
     hstpf_real_t v[100];
     (void)state;
     config(&c, HSTPF_ENGINE_AUTO);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_E_CONFIG);
     c.noise_e.kind = HSTPF_DIST_GAMMA;
     c.noise_e.shape = 0.5;
     c.noise_e.scale = 0.2;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     assert_int_equal(filt.engine, HSTPF_ENGINE_GRID); /* auto: the grid for non-Gaussian noise */
     assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_E_CONFIG);
     c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
     config(&c, HSTPF_ENGINE_KALMAN);
     c.noise_v.kind = HSTPF_DIST_GAMMA;
     c.noise_v.shape = 0.1;
     c.noise_v.scale = 0.05;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
     config(&c, HSTPF_ENGINE_PARTICLE);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     assert_int_equal(hstpf_particles(&filt, 0, s, v, NULL), HSTPF_OK);
     c.engine = (hstpf_engine_t)7;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_E_CONFIG);
 }
 
@@ -311,6 +320,7 @@ static void nis_run(const hstpf_theta_t *truth, double *nis_mean, double *pos_rm
         c.noise_s = sc.noise_s;
         c.noise_v = sc.noise_v;
         c.noise_e = sc.noise_e;
+        tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
         hstpf_sim_init(&sim, &sc);
         while (sim.t <= 900.0) {

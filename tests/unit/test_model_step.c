@@ -96,6 +96,7 @@ static void test_dynamics(void **state)
     uint16_t l, i;
     (void)state;
     base_config(&c);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, 1.0, 0.0, 1000.3, 1); /* first fix */
     for (l = 0; l < 2; ++l) {
@@ -138,6 +139,7 @@ static void test_track(void **state)
     c.track = track;
     c.n_track = 3;
     c.noise_e.sd = 0.5; /* particles on both sides of 1000.3 m */
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     for (k = 0; k < sizeof pos / sizeof pos[0]; ++k) {
         double g = -99.0;
@@ -177,6 +179,7 @@ static void test_no_reversal(void **state)
     (void)state;
     base_config(&c);
     c.init_speed_mps = 1.0;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, 1.0, 0.0, 500.0, 1);
     for (l = 0; l < 2; ++l) {
@@ -192,6 +195,7 @@ static void test_no_reversal(void **state)
     }
     /* a moderate braking that does not reach 0 is applied in full:
      * u = -50: a = -xi (50 + 0.8145304) = -0.470274, v' = 0.529726 (CRH3) */
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, 1.0, 0.0, 500.0, 1);
     step(&filt, 1.0, -50.0, 501.0, 1);
@@ -221,6 +225,7 @@ static void test_model_weights(void **state)
     int k;
     (void)state;
     base_config(&c);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, dts[0], 20.0, ys[0], 1);
     for (l = 0; l < 2; ++l) {
@@ -285,6 +290,7 @@ static void test_paper_weight(void **state)
     (void)state;
     base_config(&c);
     c.weight_method = HSTPF_WEIGHT_PAPER;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, 1.0, 20.0, 1000.3, 1);
     step(&filt, 0.5, 20.0, 1025.9, 1);
@@ -311,6 +317,7 @@ static void test_noise_scaling(void **state)
     base_config(&c);
     c.n_particles = HSTPF_MAX_PARTICLES;
     c.noise_s.sd = 0.3;
+    tu_workspace(&c, 1);
     assert_int_equal(hstpf_init(&filt2, sizeof filt2, &c), HSTPF_OK);
     step(&filt2, 1.0, 0.0, 2000.0, 1);
     for (l = 0; l < 2; ++l) {
@@ -340,6 +347,7 @@ static void test_predict_only(void **state)
     uint16_t i;
     (void)state;
     base_config(&c);
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     step(&filt, 1.0, 20.0, 1000.3, 1);
     step(&filt, 1.0, 20.0, 1050.0, 1);

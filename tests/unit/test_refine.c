@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 static hstpf_t filt;
@@ -53,6 +54,7 @@ static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track,
     c.models = hstpf_train_types;
     c.n_models = HSTPF_N_TRAIN_TYPES;
     c.seed = seed;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     hstpf_sim_default(&sc);
     sc.truth = *truth;
@@ -166,6 +168,7 @@ static void test_off(void **state)
     c.refine = 0;
     c.models = hstpf_train_types;
     c.n_models = 3;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     memset(&in, 0, sizeof in);
     in.dt_s = 1.0;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 static hstpf_t filt;
@@ -54,6 +55,7 @@ static void test_gain_then_table(void **state)
     (void)state;
     start(&sim, &c, 1);
     c.refine_gain_sd = 0.3;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     for (k = 0; k < 4500; ++k) {
         hstpf_input_t in;
@@ -98,6 +100,7 @@ static void test_far_fix_no_gate(void **state)
     (void)state;
     start(&sim, &c, 2);
     c.gate_m = 0.0;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     for (k = 0; k < 400; ++k) {
         hstpf_input_t in;
@@ -135,7 +138,9 @@ static void test_prior_zero_is_off(void **state)
     c.refine_prior_q = 0.0;
     c_off = c;
     c_off.refine = 0;
+    tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    tu_workspace(&c_off, 1);
     assert_int_equal(hstpf_init(&off, sizeof off, &c_off), HSTPF_OK);
     for (k = 0; k < 300; ++k) {
         hstpf_input_t in;

@@ -17,6 +17,15 @@ void tu_config_rows(hstpf_config_t *c, hstpf_theta_t *models, const char *const 
     c->n_models = n;
 }
 
+void tu_workspace(hstpf_config_t *c, int slot)
+{
+    /* uint64_t: aligned to HSTPF_WORKSPACE_ALIGN */
+    static uint64_t ws[TU_WS_SLOTS][(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
+    assert_true(slot >= 0 && slot < TU_WS_SLOTS);
+    c->workspace = ws[slot];
+    c->workspace_size = sizeof ws[slot];
+}
+
 hstpf_input_t tu_input(double dt, double u, double y, int has_y)
 {
     hstpf_input_t in;

@@ -67,6 +67,7 @@ typedef struct {
 } result_t;
 
 static hstpf_t filt; /* static, as on a target; large for 17 x 1000 */
+static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -129,7 +130,11 @@ static double run_once(const hstpf_config_t *cfg, const hstpf_input_t *in, unsig
         hstpf_estimate_t est;
         double t0, t1, c0, c1;
         unsigned k, ok = 0;
-        int32_t err = hstpf_init(&filt, sizeof filt, cfg);
+        hstpf_config_t c = *cfg;
+        int32_t err;
+        c.workspace = ws;
+        c.workspace_size = sizeof ws;
+        err = hstpf_init(&filt, sizeof filt, &c);
         if (err != HSTPF_OK) {
             fprintf(stderr, "hstpf_init: %s\n", hstpf_strerror(err));
             return -1.0;

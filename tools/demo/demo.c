@@ -8,6 +8,7 @@
 #include "hstpf_sim.h"
 
 static hstpf_t filt; /* ~100 kB: static, as on a target */
+static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
 
 static void usage(void)
 {
@@ -70,6 +71,8 @@ int main(int argc, char **argv)
     cfg.models = models;
     cfg.n_models = 3;
     cfg.seed = fseed;
+    cfg.workspace = ws;
+    cfg.workspace_size = sizeof ws;
     err = hstpf_init(&filt, sizeof filt, &cfg);
     if (err != HSTPF_OK) {
         fprintf(stderr, "hstpf_init: %s\n", hstpf_strerror(err));

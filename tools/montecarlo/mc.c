@@ -310,7 +310,14 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         cfg.n_track = sc.n_track;
     }
     {
-        const int32_t rc = hstpf_init(f, sizeof *f, &cfg);
+        size_t wsn = 0;
+        int32_t rc = hstpf_workspace_size(&cfg, &wsn);
+        /* malloc's alignment covers HSTPF_WORKSPACE_ALIGN; sized for this run's engine */
+        cfg.workspace = wsn > 0 ? malloc(wsn) : NULL;
+        cfg.workspace_size = wsn;
+        if (rc == HSTPF_OK) {
+            rc = hstpf_init(f, sizeof *f, &cfg);
+        }
         if (rc != HSTPF_OK) {
             const char *field = "";
             (void)hstpf_config_check(&cfg, &field);
@@ -473,6 +480,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     if (n_err > 0) {
         fprintf(stderr, "warning: %ld steps rejected (truth %d seed %d)\n", n_err, truth, seed);
     }
+    free(f->cfg.workspace);
     free(f);
 }
 

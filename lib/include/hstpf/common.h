@@ -34,13 +34,14 @@ typedef float hstpf_real_t;
 
 /*
  * Compile-time capacities. Override with -D when building the library and
- * its users (they size hstpf_t; hstpf_init() rejects a mismatch).
+ * its users (they size hstpf_t and HSTPF_WORKSPACE_MAX_BYTES; hstpf_init()
+ * rejects a mismatch of sizeof(hstpf_t)).
  */
 #ifndef HSTPF_MAX_MODELS
 #define HSTPF_MAX_MODELS 17 /**< models (train types) per instance */
 #endif
 #ifndef HSTPF_MAX_PARTICLES
-#define HSTPF_MAX_PARTICLES 256 /**< particles per model */
+#define HSTPF_MAX_PARTICLES 256 /**< particles per model (a bound: they are in the workspace) */
 #endif
 #ifndef HSTPF_DIST_QBITS
 #define HSTPF_DIST_QBITS 8 /**< log2 of the inverse-CDF table's bins */
@@ -60,7 +61,7 @@ enum {
     HSTPF_OK = 0,           /**< success */
     HSTPF_E_NULL = -1,      /**< a required pointer is NULL */
     HSTPF_E_INIT = -2,      /**< instance not initialised (or overwritten) */
-    HSTPF_E_SIZE = -3,      /**< a count is 0 or above its capacity */
+    HSTPF_E_SIZE = -3,      /**< a count is 0 or above its capacity, or a buffer too small */
     HSTPF_E_NONFINITE = -4, /**< an input is NaN or infinite */
     HSTPF_E_DT = -5,        /**< step length not in (0, HSTPF_DT_MAX_S] */
     HSTPF_E_RANGE = -6,     /**< a value is outside its physical range */

@@ -270,6 +270,15 @@ typedef struct {
      *  20 min of cruise in a paper Case 1 run, pulling the hypothesis'
      *  weight up with it). */
     double refine_gain_sd;
+    /** Caller-owned memory for the engine in use: the particles or the
+     *  grid cells, which hstpf_t does not hold. At least
+     *  hstpf_workspace_size() bytes (HSTPF_PARTICLE_WS_BYTES,
+     *  HSTPF_GRID_WS_BYTES; none for the Kalman engine, which may leave it
+     *  NULL), aligned to HSTPF_WORKSPACE_ALIGN. The instance keeps the
+     *  pointer: the memory must live as long as the instance and serve no
+     *  other instance (NULL). */
+    void *workspace;
+    size_t workspace_size;       /**< bytes at workspace (0) */
 } hstpf_config_t;
 
 /** One step's inputs. */
@@ -378,15 +387,40 @@ typedef struct {
 #define HSTPF__GRID_CELLS (HSTPF_GRID_NS * HSTPF_GRID_NV)
 #define HSTPF__GRID_K (2 * (HSTPF_GRID_NS > HSTPF_GRID_NV ? HSTPF_GRID_NS : HSTPF_GRID_NV) + 2)
 
-/* Private: the grid engine's memory (unused by the other engines). */
+/*
+ * The workspace (hstpf_config_t.workspace) each engine needs, in bytes, for
+ * n_models models (and n_particles particles): a caller that knows its
+ * engine at compile time sizes a static buffer with these; at run time
+ * hstpf_workspace_size() gives the same figure for a configuration.
+ * Particles: s, v and log weight per particle and model, and three
+ * per-particle arrays for one model's step (plus 16-bit counts). Grid:
+ * the cells of every model, the transported grid and a model's saved
+ * cells for a retried step, and each model's mass at rest.
+ */
+#define HSTPF_WORKSPACE_ALIGN 8u /**< alignment of the workspace, bytes */
+#define HSTPF__WS_ROUND(b) ((((size_t)(b)) + 7u) & ~(size_t)7u)
+#define HSTPF_PARTICLE_WS_BYTES(n_models, n_particles)                                                     \
+    HSTPF__WS_ROUND(sizeof(hstpf_real_t) * 3u * ((size_t)(n_models) + 1u) * (size_t)(n_particles) +         \
+                    sizeof(uint16_t) * (size_t)(n_particles))
+#define HSTPF_GRID_WS_BYTES(n_models)                                                                      \
+    HSTPF__WS_ROUND(sizeof(hstpf_real_t) * (((size_t)(n_models) + 2u) * (size_t)HSTPF__GRID_CELLS +         \
+                                            ((size_t)(n_models) + 1u) * (size_t)HSTPF_GRID_NS + 4u))
+/** The largest workspace any engine needs at the compile-time capacities. */
+#define HSTPF_WORKSPACE_MAX_BYTES                                                                          \
+    (HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES) > HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS) \
+         ? HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)                                   \
+         : HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS))
+
+/* Private: the grid engine's state. The cells are in the workspace: p[l]
+ * and rest[l] are model l's, work and save are scratch. */
 typedef struct {
-    hstpf_real_t p[HSTPF_MAX_MODELS][HSTPF__GRID_CELLS]; /* cell masses, row j = speed cell */
+    hstpf_real_t (*p)[HSTPF__GRID_CELLS];                /* cell masses, row j = speed cell */
+    hstpf_real_t (*rest)[HSTPF_GRID_NS];                 /* mass at rest (v = 0), per position cell */
+    hstpf_real_t *work;                                  /* the transported grid, HSTPF__GRID_CELLS */
+    hstpf_real_t *save;                                  /* a model's cells before the step (+ NS + 4) */
     hstpf_real_t geom[HSTPF_MAX_MODELS][4];              /* s0, ds, v0, dv: first edges, widths */
     hstpf_real_t pred_mass[HSTPF_MAX_MODELS];            /* mass kept by the last prediction */
-    hstpf_real_t work[HSTPF__GRID_CELLS];                /* the transported grid */
-    hstpf_real_t rest[HSTPF_MAX_MODELS][HSTPF_GRID_NS];  /* mass at rest (v = 0), per position cell */
     hstpf_real_t rnew[HSTPF_GRID_NS], rpend[HSTPF_GRID_NS]; /* rest being built: held, and to be diffused */
-    hstpf_real_t save[HSTPF__GRID_CELLS + HSTPF_GRID_NS + 4]; /* a model's cells before the step */
     hstpf_real_t tail;                                   /* mass a box leaves out per side */
     hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
     hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
@@ -398,9 +432,9 @@ typedef struct {
 
 /* Private per-model state. */
 typedef struct {
-    hstpf_real_t s[HSTPF_MAX_PARTICLES];  /* position relative to origin */
-    hstpf_real_t v[HSTPF_MAX_PARTICLES];
-    hstpf_real_t lw[HSTPF_MAX_PARTICLES]; /* normalised log weights */
+    hstpf_real_t *s;                      /* particles in the workspace: position rel. to origin */
+    hstpf_real_t *v;
+    hstpf_real_t *lw;                     /* normalised log weights */
     hstpf_rng_t rng;
     hstpf_real_t k0, k1, k2;              /* xi c0, xi c1 3.6, xi c2 3.6^2 */
     double logq;
@@ -426,11 +460,12 @@ typedef struct {
 
 /**
  * The instance. Caller-owned; all members are private and may change
- * between versions. sizeof(hstpf_t) is O(HSTPF_MAX_MODELS x
- * HSTPF_MAX_PARTICLES x 3 x sizeof(hstpf_real_t)) plus the noise tables
- * plus the grid engine's cells, (HSTPF_MAX_MODELS + 2) x HSTPF_GRID_NS x
- * HSTPF_GRID_NV x sizeof(hstpf_real_t);
- * docs/footprint.md lists measured sizes.
+ * between versions. sizeof(hstpf_t) is the bank's state, O(HSTPF_MAX_MODELS)
+ * plus the four noise tables and the track; the engine's particles or
+ * cells are in the caller's workspace (hstpf_config_t.workspace), sized
+ * for the engine and the counts in use. Copying an instance copies the
+ * workspace pointer, not the workspace. docs/footprint.md lists measured
+ * sizes.
  */
 typedef struct {
     uint32_t magic;
@@ -442,10 +477,10 @@ typedef struct {
     hstpf_real_t track_rel[HSTPF_MAX_TRACK_SEGMENTS]; /* starts - origin */
     hstpf_real_t track_acc[HSTPF_MAX_TRACK_SEGMENTS]; /* xi (i + 600/R) */
     hstpf_rng_t rng;                 /* the paired bank's common stream */
-    hstpf_real_t scratch[HSTPF_MAX_PARTICLES];
-    hstpf_real_t nz_s[HSTPF_MAX_PARTICLES]; /* this step's noise draws */
-    hstpf_real_t nz_v[HSTPF_MAX_PARTICLES];
-    uint16_t counts[HSTPF_MAX_PARTICLES];
+    hstpf_real_t *scratch;           /* particle engine, in the workspace */
+    hstpf_real_t *nz_s;              /* this step's noise draws */
+    hstpf_real_t *nz_v;
+    uint16_t *counts;
     double origin_m;                 /* particles are relative to this */
     double time_s;
     double xi;
@@ -470,7 +505,7 @@ typedef struct {
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
     uint8_t fit;
     uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
-    hstpf_grid_ws_t grid;            /* the grid engine's cells */
+    hstpf_grid_ws_t grid;            /* the grid engine's state; its cells are in the workspace */
 } hstpf_t;
 
 /**
@@ -492,6 +527,17 @@ int32_t hstpf_config_default(hstpf_config_t *cfg);
 int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field);
 
 /**
+ * @brief The workspace, in bytes, that hstpf_init() needs for cfg: for the
+ * engine cfg resolves to (AUTO included) with its n_models and n_particles.
+ * 0 for the Kalman engine. The workspace fields of cfg are not read.
+ * @param cfg    configuration (checked as by hstpf_config_check()).
+ * @param bytes  set to the size on success.
+ * @return HSTPF_OK, HSTPF_E_NULL, or the error hstpf_config_check() gives.
+ *   Cost O(n_models + n_track).
+ */
+int32_t hstpf_workspace_size(const hstpf_config_t *cfg, size_t *bytes);
+
+/**
  * @brief Initialises an instance: validates cfg, copies the models and the
  * track, builds the noise tables and seeds one RNG stream per model.
  * The models are placed when the filter acquires lock from its first fixes
@@ -500,15 +546,18 @@ int32_t hstpf_config_check(const hstpf_config_t *cfg, const char **field);
  * @param f       caller-owned instance.
  * @param f_size  sizeof(hstpf_t) as the caller sees it (HSTPF_E_ABI if it
  *                differs from the library's: mismatched capacity macros).
- * @param cfg     configuration (not kept; models and track are copied).
- * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_ABI; HSTPF_E_SIZE (n_models,
- *   n_particles, n_track); HSTPF_E_NONFINITE; HSTPF_E_RANGE (coefficients,
+ * @param cfg     configuration (not kept; models and track are copied;
+ *                the workspace is kept, see hstpf_config_t.workspace).
+ * @return HSTPF_OK; HSTPF_E_NULL (also: no workspace where the engine needs
+ *   one); HSTPF_E_ABI; HSTPF_E_SIZE (n_models, n_particles, n_track; a
+ *   workspace smaller than hstpf_workspace_size() or not aligned to
+ *   HSTPF_WORKSPACE_ALIGN); HSTPF_E_NONFINITE; HSTPF_E_RANGE (coefficients,
  *   gamma_rot, prior, track values out of range, track not increasing);
  *   HSTPF_E_CONFIG (enums, engine KALMAN with non-Gaussian noise,
  *   ess_threshold, q_floor, declare_threshold, declare_hold_s, gate_m,
  *   dt_nominal_s, roughening values); HSTPF_E_DIST
  *   (from hstpf_dist_init()). On error *f is unchanged.
- * Cost: four hstpf_dist_init() calls; no memory besides *f.
+ * Cost: four hstpf_dist_init() calls; no memory besides *f and the workspace.
  */
 int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
 

@@ -20,6 +20,12 @@
 #define PAINT 0xC5A5C5A5u
 
 static hstpf_t filt;
+/* the workspace for what this program runs: 3 models, 100 particles or
+ * the grid (uint64_t: HSTPF_WORKSPACE_ALIGN) */
+#define WS_BYTES                                                                                        \
+    (HSTPF_PARTICLE_WS_BYTES(3, 100) > HSTPF_GRID_WS_BYTES(3) ? HSTPF_PARTICLE_WS_BYTES(3, 100)          \
+                                                               : HSTPF_GRID_WS_BYTES(3))
+static uint64_t ws[(WS_BYTES + 7u) / 8u];
 static hstpf_input_t inputs[N_STEPS];
 
 static inline __attribute__((always_inline)) uint32_t *stack_pointer(void)
@@ -160,6 +166,8 @@ int main(void)
     cfg.models = models;
     cfg.n_models = 3u;
     cfg.seed = 2u;
+    cfg.workspace = ws;
+    cfg.workspace_size = sizeof ws;
 
     /* the simulated inputs first, so that only the estimator runs below */
     hstpf_sim_init(&sim, &sc);
@@ -227,6 +235,15 @@ int main(void)
             return 1;
         }
         p = put_s(line, "m4f: timed Kalman pass: ");
+        p = put_u(p, ok2);
+        p = put_s(p, " steps of 3 models in ");
+        p = put_u(p, ticks);
+        emit(line, put_s(p, " SysTick counts"));
+        pc.engine = HSTPF_ENGINE_GRID;
+        if (timed_pass(&pc, &ok2, &ticks) != 0) {
+            return 1;
+        }
+        p = put_s(line, "m4f: timed grid pass: ");
         p = put_u(p, ok2);
         p = put_s(p, " steps of 3 models in ");
         p = put_u(p, ticks);
