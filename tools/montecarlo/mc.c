@@ -808,7 +808,7 @@ static void usage(void)
             "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
-            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine] [--refine-prior Q]\n"
+            "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine] [--refine-prior Q] [--refine-spread X]\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
@@ -869,6 +869,8 @@ int main(int argc, char **argv)
             seeds = atoi(v);
         } else if (!strcmp(a, "--refine-prior")) {
             st.base.refine_prior_q = atof(v);
+        } else if (!strcmp(a, "--refine-spread")) {
+            st.base.refine_spread = atof(v);
         } else if (!strcmp(a, "--threads")) {
             threads = atoi(v);
         } else if (!strcmp(a, "--duration")) {
