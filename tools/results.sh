@@ -42,6 +42,12 @@ for q in 0.003 0.001; do
     "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tail -2 | tee "$out/$s-prior$q.txt"
   done
 done
+echo "== the rows' spread (refine_spread, default 0.3): the band against the decisions"
+for sp in 0.2 0.4; do
+  for s in paper1 all17 stops off10 off15 off20 mass10 mass20 absent; do
+    "$mc" --scenario "$s" --seeds "$seeds" --refine-spread "$sp" | tail -1 | tee "$out/$s-spread$sp.txt"
+  done
+done
 echo "== on-table figures without the continuous hypothesis"
 for s in paper1 all17 stops; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"

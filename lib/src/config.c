@@ -40,7 +40,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->reacquire_after = 5;
     cfg->refine = 1;
     cfg->refine_prior_q = 0.01;
-    cfg->refine_spread = 0.2;
+    cfg->refine_spread = 0.3; /* docs/model.md, "Prior" */
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
     return HSTPF_OK;
 }

@@ -48,3 +48,23 @@ def test_issue13_only_prints_present_scenarios(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "### `all17-case2`" in out and "M = 256" in out
     assert "heavy-t" not in out and "Journeys" not in out
+
+
+def test_spread_rows(tmp_path):
+    # the default (0.3) reads the scenarios' own files, the others their -spreadX files; a
+    # value whose files are missing gets no row
+    crh3 = "CRH3                      100.0%     {}     291     706     274   0.0%   0.0%   0.00%   0.00%     0\n"
+    off = ("trains off the table: W(v) error at the end median 3.11% p90 13.54%; the 95% band covers "
+           "the truth in {}% of runs; 'no type fits' at the end in 0.0%; a type declared in {}% (refine on)\n")
+    for tag, x_med, cov in (("", 208, 90), ("-spread0.4", 209, 95)):
+        (tmp_path / f"paper1{tag}.txt").write_text("truth ...\n" + crh3.format(x_med))
+        (tmp_path / f"all17{tag}.txt").write_text(TOTAL + "\n")
+        for i, s in enumerate(["stops", "off10", "off15", "off20", "mass10", "mass20", "absent"]):
+            (tmp_path / f"{s}{tag}.txt").write_text(off.format(f"{cov + i}.0", f"{i}.5"))
+    table = rt.spread(tmp_path).splitlines()
+    assert len(table) == 4  # header, rule, 0.3 and 0.4 (no 0.2 files)
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells[:3] == ["0.3 (default)", "208 / 291 / 706", "66.7%, 50.0%"]
+    assert cells[3:10] == ["90.0%", "91.0%", "92.0%", "93.0%", "94.0%", "95.0%", "96.0%"]
+    assert cells[10] == "2.5%"  # off15's own line
+    assert table[3].startswith("| 0.4 | 209 / 291 / 706 |")

@@ -92,6 +92,28 @@ def prior(d: Path) -> str:
     return "\n".join(out)
 
 
+def spread(d: Path) -> str:
+    """The rows' spread (refine_spread): the band's coverage against the
+    decisions (the default 0.3 is the scenarios' own run)."""
+    band = ["stops", "off10", "off15", "off20", "mass10", "mass20", "absent"]
+    out = ["| `refine_spread` | Case 1 decision x_med / p90 / max [s] | all17: success, false | "
+           + " | ".join(f"{s}: band covers" for s in band) + " | off15: a type declared |",
+           "|---|---|---|" + "---|" * len(band) + "---|"]
+    for sp in ("0.2", "0.3", "0.4"):
+        tag = "" if sp == "0.3" else f"-spread{sp}"
+        files = [d / f"paper1{tag}.txt", d / f"all17{tag}.txt"] + [d / f"{s}{tag}.txt" for s in band]
+        if not all(f.exists() for f in files):
+            continue
+        row = last(files[0], "CRH3 ").split()
+        a17 = last(files[1], "total:")
+        cov = [num(r"covers the truth in ([\d.]+%)", last(f, "trains off the table:")) for f in files[2:]]
+        out.append("| {} | {} / {} / {} | {}, {} | {} | {} |".format(
+            sp + (" (default)" if sp == "0.3" else ""), row[2], row[3], row[4],
+            num(r"success ([\d.]+%)", a17), num(r"false declarations \d+ \(([\d.]+%)\)", a17),
+            " | ".join(cov), num(r"a type declared in ([\d.]+%)", last(files[4], "trains off the table:"))))
+    return "\n".join(out)
+
+
 def studies(d: Path) -> str:
     """The paper's cases (their truth's row) and the 17-type studies (their total line)."""
     out = ["| scenario | result (hstpf-mc's own line) |", "|---|---|"]
@@ -191,6 +213,8 @@ def main(argv=None) -> int:
         print(offtable(d))
         print("\n### The continuous hypothesis's prior weight\n")
         print(prior(d))
+        print("\n### The rows' spread\n")
+        print(spread(d))
     for sc, title in ISSUE13.items():
         if any((d / f"{sc}-{tag}.txt").exists() for tag, _ in ENGINES):
             print(f"\n### `{sc}`: {title}\n")

@@ -261,8 +261,9 @@ typedef struct {
     uint8_t refine;
     /** Prior weight of the continuous hypothesis, [0, 0.5] (0.01). */
     double refine_prior_q;
-    /** Relative sd of each coefficient around its row for load and wear,
-     *  in the continuous hypothesis' prior, [0, 1] (0.2). */
+    /** Relative sd of each coefficient around its row (load, wear, wind,
+     *  coupled consists), in the continuous hypothesis' prior and in each
+     *  row's W(v) band, [0, 1] (0.3; docs/model.md says why). */
     double refine_spread;
     /** Prior sd of the traction gain k around 1, [0, 0.5] (0: k fixed at 1.
      *  At constant speed k u - W(v) = 0 leaves k and theta on a ridge the
