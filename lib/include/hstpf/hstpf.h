@@ -518,7 +518,8 @@ int32_t hstpf_config_default(hstpf_config_t *cfg);
 
 /**
  * @brief Checks a configuration against the library's one table of ranges
- * (the same check hstpf_init() makes), without an instance.
+ * (the same check hstpf_init() makes, but for the workspace, which is
+ * memory rather than configuration), without an instance.
  * @param cfg    configuration to check.
  * @param field  if not NULL, set to the name of the first failing field
  *               (e.g. "noise_e.sd", "models[3].c1"), or to "" when valid.
