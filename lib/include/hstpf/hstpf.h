@@ -24,10 +24,13 @@
  * xi = 9.81 / (1 + gamma) / 1000 (m/s^2 per N/kN), u and W in N/kN,
  * g(s) = i + 600 / R from the optional track profile.
  *
- * Memory: the caller owns one hstpf_t (static, or on a large enough stack);
- * the library never allocates. Time: hstpf_step() costs O(models x
- * particles) with a fixed bound, no loops that depend on data beyond that
- * (the track look-up walks at most the number of segments the cloud moved).
+ * Memory: the caller owns one hstpf_t (the bank, about 21 KiB) and, for
+ * the particle and grid engines, a workspace sized for the engine and
+ * counts in use (hstpf_config_t.workspace, hstpf_workspace_size()); the
+ * library never allocates. Time: hstpf_step() has a fixed bound per
+ * engine: O(models x particles), O(models), O(models x cells x kernel
+ * taps); no loops that depend on data beyond that (the track look-up walks
+ * at most the number of segments the state moved).
  * Thread safety: an instance must not be used from two threads at once;
  * different instances are independent. All functions are reentrant.
  */
