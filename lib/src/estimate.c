@@ -149,8 +149,14 @@ int32_t hstpf_resistance_band(const hstpf_estimate_t *e, double v_mps, double *w
             var += h[i] * h[j] * c[idx[i][j]];
         }
     }
-    *w = (double)e->theta[0] + (double)e->theta[1] * h[1] + (double)e->theta[2] * h[2];
-    *sd = sqrt(var > 0.0 ? var : 0.0);
+    {
+        const double wv = (double)e->theta[0] + (double)e->theta[1] * h[1] + (double)e->theta[2] * h[2];
+        if (!hstpf__fin(wv) || !hstpf__fin(var)) {
+            return HSTPF_E_NONFINITE; /* a NaN variance must not read as a band of width 0 */
+        }
+        *w = wv;
+        *sd = sqrt(var > 0.0 ? var : 0.0);
+    }
     return HSTPF_OK;
 }
 

@@ -79,6 +79,16 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->theta[0] = (double)e->theta[0];
     v->theta[1] = (double)e->theta[1];
     v->theta[2] = (double)e->theta[2];
+    v->fit = (uint8_t)e->fit;
+    v->off_what = (uint8_t)e->off_what;
+    {
+        unsigned k;
+        for (k = 0; k < HSTPFD_BAND_N; ++k) {
+            double w = 0.0, sd = NAN; /* NaN unless the library gives it: never sent as valid */
+            (void)hstpf_resistance_band(e, (double)k * HSTPFD_BAND_STEP_KMH / 3.6, &w, &sd);
+            v->w_sd[k] = sd;
+        }
+    }
     v->pos_stale = c->sched.pos_stale;
     v->trac_stale = c->sched.trac_stale;
     v->bad_crc = p->bad_crc + t->bad_crc;

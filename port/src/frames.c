@@ -2,6 +2,7 @@
  * port/dbc/hstpf.dbc, hstpf_e2e for CRC and alive counter). */
 #include "frames.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "hstpf_can.h"
@@ -87,15 +88,15 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
 static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID,  HSTPF_FRAME_EST_TYPE_ID,
                                                   HSTPF_FRAME_EST_THETA_ID,  HSTPF_FRAME_HEALTH_RX_ID,
                                                   HSTPF_FRAME_HEALTH_SYS_ID, HSTPF_FRAME_HEALTH_TIME_ID,
-                                                  HSTPF_FRAME_EST_QUALITY_ID};
+                                                  HSTPF_FRAME_EST_QUALITY_ID, HSTPF_FRAME_EST_BAND_ID};
 static const uint16_t out_data_id[HSTPFD_N_OUTPUTS] = {
     HSTPF_FRAME_EST_STATE_DATA_ID, HSTPF_FRAME_EST_TYPE_DATA_ID,   HSTPF_FRAME_EST_THETA_DATA_ID,
     HSTPF_FRAME_HEALTH_RX_DATA_ID, HSTPF_FRAME_HEALTH_SYS_DATA_ID, HSTPF_FRAME_HEALTH_TIME_DATA_ID,
-    HSTPF_FRAME_EST_QUALITY_DATA_ID};
+    HSTPF_FRAME_EST_QUALITY_DATA_ID, HSTPF_FRAME_EST_BAND_DATA_ID};
 static const uint32_t out_cycle_ms[HSTPFD_N_OUTPUTS] = {
     HSTPF_FRAME_EST_STATE_CYCLE_MS, HSTPF_FRAME_EST_TYPE_CYCLE_MS,   HSTPF_FRAME_EST_THETA_CYCLE_MS,
     HSTPF_FRAME_HEALTH_RX_CYCLE_MS, HSTPF_FRAME_HEALTH_SYS_CYCLE_MS, HSTPF_FRAME_HEALTH_TIME_CYCLE_MS,
-    HSTPF_FRAME_EST_QUALITY_CYCLE_MS};
+    HSTPF_FRAME_EST_QUALITY_CYCLE_MS, HSTPF_FRAME_EST_BAND_CYCLE_MS};
 
 void hstpfd_tx_init(hstpfd_tx_state_t *st)
 {
@@ -157,6 +158,7 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         struct hstpf_can_est_type_t m;
         (void)hstpf_can_est_type_init(&m);
         m.type_status = hstpf_frames_est_type_type_status_raw((double)v->status);
+        m.fit_status = hstpf_frames_est_type_fit_status_raw((double)v->fit);
         m.declared_type = row_code(v->declared_row);
         m.declared_weight = hstpf_frames_est_type_declared_weight_raw(v->declared_row == -1 ? 0.0 : v->declared_q);
         m.leader_type = row_code(v->leader_row);
@@ -203,6 +205,28 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.est_time_valid = v->est_time_valid ? 1u : 0u;
         m.est_time = (uint16_t)(v->est_time_valid ? v->est_time_ms % HSTPF_FIX_TIME_WRAP_MS : 0u);
         n = hstpf_can_est_quality_pack(f->data, &m, 8u);
+        break;
+    }
+    case HSTPFD_OUT_BAND: {
+        struct hstpf_can_est_band_t m;
+        int ok = 1;
+        unsigned k;
+        uint16_t raw[HSTPFD_BAND_N];
+        for (k = 0; k < HSTPFD_BAND_N; ++k) {
+            const double sd = v->w_sd[k];
+            ok = ok && hstpf_can_est_band_w_sd0_is_in_phys_range(sd); /* one scale for all five */
+            raw[k] = hstpf_frames_est_band_w_sd0_raw(v->have_fix && isfinite(sd) ? sd : 0.0);
+        }
+        (void)hstpf_can_est_band_init(&m);
+        m.band_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.band_fault = (uint8_t)(v->have_fix && !ok);
+        m.w_sd0 = raw[0];
+        m.w_sd1 = raw[1];
+        m.w_sd2 = raw[2];
+        m.w_sd3 = raw[3];
+        m.w_sd4 = raw[4];
+        m.off_what = hstpf_frames_est_band_off_what_raw((double)(v->fit == (uint8_t)HSTPF_FIT_NONE ? v->off_what : 0u));
+        n = hstpf_can_est_band_pack(f->data, &m, 8u);
         break;
     }
     case 5: {

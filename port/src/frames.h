@@ -53,6 +53,10 @@ void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms);
 #define HSTPFD_N_INPUTS 2
 uint32_t hstpfd_input_id(unsigned i);
 
+/* EstBand: the sd of W(v) at V = k x 87.5 km/h, k = 0..4 (docs/can.md). */
+#define HSTPFD_BAND_N 5
+#define HSTPFD_BAND_STEP_KMH 87.5
+
 /* Everything the output frames carry. Validity rule (docs/can.md): a value
  * goes out marked valid only when `valid` is set and the value is finite and
  * within its signal's range; otherwise its frame's valid bit is 0 and, if
@@ -74,6 +78,9 @@ typedef struct {
     int leader_row;           /* Table 1 row, -2 custom, -1 none */
     double leader_q;
     double theta[3];
+    uint8_t fit;              /* hstpf_fit_t */
+    uint8_t off_what;         /* HSTPF_OFF_* bits */
+    double w_sd[HSTPFD_BAND_N]; /* sd of W(v) at HSTPFD_BAND_STEP_KMH x k, N/kN */
     uint8_t pos_stale, trac_stale;
     uint32_t bad_crc, repeated, jump, wrong_length; /* summed over the inputs */
     uint32_t stale_events, unknown_id, error_frames, degeneracy;
@@ -81,8 +88,9 @@ typedef struct {
 } hstpfd_tx_values_t;
 
 /* Sender state: one E2E counter per output frame. */
-#define HSTPFD_N_OUTPUTS 7
+#define HSTPFD_N_OUTPUTS 8
 #define HSTPFD_OUT_QUALITY 6 /* EstQuality: sent with the state (output 0), not periodic */
+#define HSTPFD_OUT_BAND 7    /* EstBand: W(v)'s band, with EstTheta's cycle */
 typedef struct {
     hstpf_e2e_tx_t e2e[HSTPFD_N_OUTPUTS];
 } hstpfd_tx_state_t;

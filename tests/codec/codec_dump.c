@@ -111,12 +111,13 @@ static void est_state(double valid, double fault, double pos, double speed)
            hstpf_can_est_state_est_speed_decode(m.est_speed));
 }
 
-static void est_type(double status, double decl, double dw, double lead, double lw)
+static void est_type(double status, double fit, double decl, double dw, double lead, double lw)
 {
     struct hstpf_can_est_type_t m;
     uint8_t f[8];
     hstpf_can_est_type_init(&m);
     m.type_status = hstpf_frames_est_type_type_status_raw(status);
+    m.fit_status = hstpf_frames_est_type_fit_status_raw(fit);
     m.declared_type = hstpf_frames_est_type_declared_type_raw(decl);
     m.declared_weight = hstpf_frames_est_type_declared_weight_raw(dw);
     m.leader_type = hstpf_frames_est_type_leader_type_raw(lead);
@@ -125,12 +126,13 @@ static void est_type(double status, double decl, double dw, double lead, double 
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_TYPE_ID), f, 8);
     hstpf_can_est_type_unpack(&m, f, 8);
     head("EstType", HSTPF_FRAME_EST_TYPE_ID, f);
-    printf("\"in\":{\"TypeStatus\":%.17g,\"DeclaredType\":%.17g,\"DeclaredWeight\":%.17g,\"LeaderType\":%.17g,"
-           "\"LeaderWeight\":%.17g},",
-           status, decl, dw, lead, lw);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%.17g,\"DeclaredType\":%.17g,\"DeclaredWeight\":%.17g,"
-           "\"LeaderType\":%.17g,\"LeaderWeight\":%.17g}}\n",
+    printf("\"in\":{\"TypeStatus\":%.17g,\"FitStatus\":%.17g,\"DeclaredType\":%.17g,\"DeclaredWeight\":%.17g,"
+           "\"LeaderType\":%.17g,\"LeaderWeight\":%.17g},",
+           status, fit, decl, dw, lead, lw);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%.17g,\"FitStatus\":%.17g,\"DeclaredType\":%.17g,"
+           "\"DeclaredWeight\":%.17g,\"LeaderType\":%.17g,\"LeaderWeight\":%.17g}}\n",
            m.e2e_crc, m.e2e_counter, hstpf_can_est_type_type_status_decode(m.type_status),
+           hstpf_can_est_type_fit_status_decode(m.fit_status),
            hstpf_can_est_type_declared_type_decode(m.declared_type),
            hstpf_can_est_type_declared_weight_decode(m.declared_weight),
            hstpf_can_est_type_leader_type_decode(m.leader_type), hstpf_can_est_type_leader_weight_decode(m.leader_weight));
@@ -157,6 +159,35 @@ static void est_theta(double valid, double sat, double c0, double c1, double c2)
            m.e2e_crc, m.e2e_counter, hstpf_can_est_theta_theta_valid_decode(m.theta_valid),
            hstpf_can_est_theta_theta_saturated_decode(m.theta_saturated), hstpf_can_est_theta_c0_decode(m.c0),
            hstpf_can_est_theta_c1_decode(m.c1), hstpf_can_est_theta_c2_decode(m.c2));
+}
+
+static void est_band(double valid, double fault, const double sd[5], double off)
+{
+    struct hstpf_can_est_band_t m;
+    uint8_t f[8];
+    hstpf_can_est_band_init(&m);
+    m.band_valid = hstpf_frames_est_band_band_valid_raw(valid);
+    m.band_fault = hstpf_frames_est_band_band_fault_raw(fault);
+    m.w_sd0 = hstpf_frames_est_band_w_sd0_raw(sd[0]);
+    m.w_sd1 = hstpf_frames_est_band_w_sd1_raw(sd[1]);
+    m.w_sd2 = hstpf_frames_est_band_w_sd2_raw(sd[2]);
+    m.w_sd3 = hstpf_frames_est_band_w_sd3_raw(sd[3]);
+    m.w_sd4 = hstpf_frames_est_band_w_sd4_raw(sd[4]);
+    m.off_what = hstpf_frames_est_band_off_what_raw(off);
+    hstpf_can_est_band_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_EST_BAND_ID), f, 8);
+    hstpf_can_est_band_unpack(&m, f, 8);
+    head("EstBand", HSTPF_FRAME_EST_BAND_ID, f);
+    printf("\"in\":{\"BandValid\":%.17g,\"BandFault\":%.17g,\"WSd0\":%.17g,\"WSd1\":%.17g,\"WSd2\":%.17g,"
+           "\"WSd3\":%.17g,\"WSd4\":%.17g,\"OffWhat\":%.17g},",
+           valid, fault, sd[0], sd[1], sd[2], sd[3], sd[4], off);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"BandValid\":%.17g,\"BandFault\":%.17g,\"WSd0\":%.17g,"
+           "\"WSd1\":%.17g,\"WSd2\":%.17g,\"WSd3\":%.17g,\"WSd4\":%.17g,\"OffWhat\":%.17g}}\n",
+           m.e2e_crc, m.e2e_counter, hstpf_can_est_band_band_valid_decode(m.band_valid),
+           hstpf_can_est_band_band_fault_decode(m.band_fault), hstpf_can_est_band_w_sd0_decode(m.w_sd0),
+           hstpf_can_est_band_w_sd1_decode(m.w_sd1), hstpf_can_est_band_w_sd2_decode(m.w_sd2),
+           hstpf_can_est_band_w_sd3_decode(m.w_sd3), hstpf_can_est_band_w_sd4_decode(m.w_sd4),
+           hstpf_can_est_band_off_what_decode(m.off_what));
 }
 
 static void health_rx(double ps, double ts, double crc, double rep, double jump, double len)
@@ -276,9 +307,10 @@ static void encode_set(void)
     est_state(1, 0, 350123.456, -0.37);
     est_state(1, 0, -42.0, -327.68);
     est_state(0, 1, 21474836.47, 327.67);
-    est_type(0, 255, 0.0, 2, 0.4711);
-    est_type(1, 2, 0.9532, 2, 0.9532);
-    est_type(2, 6, 1.0, 6, 1.0);
+    est_type(0, 0, 255, 0.0, 2, 0.4711);
+    est_type(1, 1, 2, 0.9532, 2, 0.9532);
+    est_type(2, 1, 6, 1.0, 6, 1.0);
+    est_type(0, 2, 255, 0.0, 14, 0.7); /* no table type fits */
     est_theta(1, 0, 0.79, 0.0064, 0.000115);
     est_theta(1, 0, 2.25, 0.019, 0.00032);
     est_theta(1, 1, 65.535, 0.065535, 0.0013107);
@@ -290,7 +322,14 @@ static void encode_set(void)
     est_quality(1, 0, 0, 1, 2.24, 0.22, 4660);
     est_quality(1, 0, 1, 1, 0.0, 0.0, 0);
     est_quality(0, 1, 0, 0, 10485.75, 40.95, 8191);
-    est_type(3, 255, 0.0, 6, 0.42); /* withdrawn */
+    est_type(3, 0, 255, 0.0, 6, 0.42); /* withdrawn */
+    {
+        static const double sd0[5] = {0.237, 0.3, 1.175, 2.6, 4.29};
+        static const double sd1[5] = {0.0, 0.05, 25.5, 25.55, 0.5};
+        est_band(1, 0, sd0, 0);
+        est_band(1, 0, sd1, 3);
+        est_band(0, 1, sd1, 12);
+    }
 }
 
 /* ---- decode side ---------------------------------------------------------- */
@@ -374,11 +413,21 @@ static int decode_line(const char *line)
     case HSTPF_FRAME_EST_TYPE_ID: {
         struct hstpf_can_est_type_t m;
         hstpf_can_est_type_unpack(&m, f, n);
-        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%u,\"DeclaredType\":%u,\"DeclaredWeight\":%.17g,"
-               "\"LeaderType\":%u,\"LeaderWeight\":%.17g",
-               m.e2e_crc, m.e2e_counter, m.type_status, m.declared_type,
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TypeStatus\":%u,\"FitStatus\":%u,\"DeclaredType\":%u,"
+               "\"DeclaredWeight\":%.17g,\"LeaderType\":%u,\"LeaderWeight\":%.17g",
+               m.e2e_crc, m.e2e_counter, m.type_status, m.fit_status, m.declared_type,
                hstpf_can_est_type_declared_weight_decode(m.declared_weight), m.leader_type,
                hstpf_can_est_type_leader_weight_decode(m.leader_weight));
+        break;
+    }
+    case HSTPF_FRAME_EST_BAND_ID: {
+        struct hstpf_can_est_band_t m;
+        hstpf_can_est_band_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"BandValid\":%u,\"BandFault\":%u,\"WSd0\":%.17g,\"WSd1\":%.17g,"
+               "\"WSd2\":%.17g,\"WSd3\":%.17g,\"WSd4\":%.17g,\"OffWhat\":%u",
+               m.e2e_crc, m.e2e_counter, m.band_valid, m.band_fault, hstpf_can_est_band_w_sd0_decode(m.w_sd0),
+               hstpf_can_est_band_w_sd1_decode(m.w_sd1), hstpf_can_est_band_w_sd2_decode(m.w_sd2),
+               hstpf_can_est_band_w_sd3_decode(m.w_sd3), hstpf_can_est_band_w_sd4_decode(m.w_sd4), m.off_what);
         break;
     }
     case HSTPF_FRAME_EST_THETA_ID: {

@@ -16,7 +16,7 @@ static void test_frame_table(void **state)
 {
     size_t i, j;
     (void)state;
-    assert_int_equal(HSTPF_FRAMES_COUNT, 9);
+    assert_int_equal(HSTPF_FRAMES_COUNT, 10);
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         assert_true(hstpf_frames[i].can_id <= 0x7FFu); /* 11-bit */
         assert_int_equal(hstpf_frames[i].length, 8);

@@ -193,14 +193,16 @@ static void test_output_frames(void **state)
 {
     FILE *fp = fopen(DIR "/clean_out.log", "r");
     char line[256];
-    hstpf_e2e_rx_t rx[7];
-    int n[7] = {0, 0, 0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1;
-    static const uint32_t ids[7] = {HSTPF_FRAME_EST_STATE_ID,   HSTPF_FRAME_EST_TYPE_ID,    HSTPF_FRAME_EST_THETA_ID,
+    hstpf_e2e_rx_t rx[8];
+    int n[8] = {0, 0, 0, 0, 0, 0, 0, 0}, i, last_status = -1, last_decl = -1, last_fit = -1;
+    struct hstpf_can_est_band_t band;
+    static const uint32_t ids[8] = {HSTPF_FRAME_EST_STATE_ID,   HSTPF_FRAME_EST_TYPE_ID,    HSTPF_FRAME_EST_THETA_ID,
                                     HSTPF_FRAME_HEALTH_RX_ID,   HSTPF_FRAME_HEALTH_SYS_ID,  HSTPF_FRAME_HEALTH_TIME_ID,
-                                    HSTPF_FRAME_EST_QUALITY_ID};
+                                    HSTPF_FRAME_EST_QUALITY_ID, HSTPF_FRAME_EST_BAND_ID};
     (void)state;
+    memset(&band, 0, sizeof band);
     assert_non_null(fp);
-    for (i = 0; i < 7; ++i) {
+    for (i = 0; i < 8; ++i) {
         hstpf_e2e_rx_config_t c;
         (void)hstpf_e2e_rx_config_default(&c, hstpf_frame_find(ids[i])->data_id, 8);
         c.max_delta = 1;
@@ -210,9 +212,9 @@ static void test_output_frames(void **state)
     while (fgets(line, sizeof line, fp) != NULL) {
         hstpfd_frame_t f;
         assert_int_equal(hstpfd_candump_parse(line, &f, NULL, 0), HSTPFD_CANDUMP_OK);
-        for (i = 0; i < 7 && ids[i] != f.id; ++i) {
+        for (i = 0; i < 8 && ids[i] != f.id; ++i) {
         }
-        assert_true(i < 7);
+        assert_true(i < 8);
         assert_true(hstpf_e2e_accepted(hstpf_e2e_rx_check(&rx[i], f.data, f.len, (uint32_t)(f.t_us / 1000))));
         ++n[i];
         if (i == 6) {
@@ -228,16 +230,37 @@ static void test_output_frames(void **state)
             assert_int_equal(hstpf_can_est_type_unpack(&m, f.data, f.len), 0);
             last_status = m.type_status;
             last_decl = m.declared_type;
+            last_fit = m.fit_status;
+        }
+        if (i == 7) {
+            assert_int_equal(hstpf_can_est_band_unpack(&band, f.data, f.len), 0);
         }
     }
     fclose(fp);
     /* 600 steps at 1 s: one state frame each; 1 Hz frames over 599.9 s */
     assert_int_equal(n[0], 600);
-    for (i = 1; i < 7; ++i) {
+    for (i = 1; i < 8; ++i) {
         assert_int_equal(n[i], 600);
     }
     assert_true(last_status == 1 || last_status == 2);
     assert_int_equal(last_decl, 2); /* CRH3, Table 1 row 2 */
+    assert_int_equal(last_fit, HSTPF_FIT_TABLE);
+    /* the declared row's band: each coefficient with its spread rho (docs/model.md), so
+     * sd(V) = rho sqrt(c0^2 + (c1 V)^2 + (c2 V^2)^2), sent in steps of 0.05 N/kN */
+    {
+        hstpf_config_t d;
+        const hstpf_theta_t *t = &hstpf_train_types[2];
+        const uint16_t raw[5] = {band.w_sd0, band.w_sd1, band.w_sd2, band.w_sd3, band.w_sd4};
+        (void)hstpf_config_default(&d);
+        assert_int_equal(band.band_valid, 1);
+        assert_int_equal(band.band_fault, 0);
+        assert_int_equal(band.off_what, 0);
+        for (i = 0; i < 5; ++i) {
+            const double v = 87.5 * i, a = t->c1 * v, b = t->c2 * v * v;
+            const double want = d.refine_spread * sqrt(t->c0 * t->c0 + a * a + b * b);
+            assert_true(fabs(hstpf_can_est_band_w_sd0_decode(raw[i]) - want) <= 0.025 + 1e-9);
+        }
+    }
 }
 
 /* From a step line of the JSONL stream: the number after "key":, or NAN
@@ -534,6 +557,49 @@ static void test_validity_json_and_frames(void **state)
     assert_int_equal(th.c2, 65535u);
     assert_int_equal(hstpf_can_est_state_unpack(&m, fs.data, fs.len), 0);
     assert_int_equal(m.est_valid, 1); /* the state itself is fine */
+
+    /* EstBand: the sd of W(v) from theta_cov (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2) at
+     * 0, 87.5, .. 350 km/h. c0's variance alone: 0.2 N/kN at every speed (4 counts of 0.05) */
+    {
+        struct hstpf_can_est_band_t b;
+        v_estimate();
+        memset(v_core.est.theta_cov, 0, sizeof v_core.est.theta_cov);
+        v_core.est.theta_cov[0] = 0.04f;
+        v_core.est.fit = HSTPF_FIT_NONE;
+        v_core.est.off_what = HSTPF_OFF_COEF | HSTPF_OFF_C0;
+        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
+        assert_int_equal(fo.id, HSTPF_FRAME_EST_BAND_ID);
+        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
+        assert_int_equal(b.band_valid, 1);
+        assert_int_equal(b.band_fault, 0);
+        assert_int_equal(b.w_sd0, 4u);
+        assert_int_equal(b.w_sd2, 4u);
+        assert_int_equal(b.w_sd4, 4u);
+        assert_int_equal(b.off_what, 3u);
+        v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+        assert_int_equal(hstpf_can_est_type_unpack(&ty, fo.data, fo.len), 0);
+        assert_int_equal(ty.fit_status, 2u);
+        /* c2's variance 1e-6: sd 1e-3 V^2, 30.6 N/kN at 175 km/h: clipped and flagged; at
+         * 87.5 km/h sqrt(0.04 + 7.656^2) = 7.659 (153 counts); OffWhat only with no type fitting */
+        v_core.est.theta_cov[5] = 1e-6f;
+        v_core.est.fit = HSTPF_FIT_TABLE;
+        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
+        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
+        assert_int_equal(b.band_valid, 0);
+        assert_int_equal(b.band_fault, 1);
+        assert_int_equal(b.w_sd1, 153u);
+        assert_int_equal(b.w_sd2, 511u);
+        assert_int_equal(b.off_what, 0u);
+        /* a NaN covariance: not valid, flagged, sent as 0 */
+        v_core.est.theta_cov[5] = 0.0f / 0.0f;
+        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
+        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
+        assert_int_equal(b.band_valid, 0);
+        assert_int_equal(b.band_fault, 1);
+        assert_int_equal(b.w_sd4, 0u);
+        v_core.est.fit = HSTPF_FIT_UNKNOWN;
+        memset(v_core.est.theta_cov, 0, sizeof v_core.est.theta_cov);
+    }
 
     /* a NaN weight: no leader named, nothing valid, no NaN in the text */
     v_estimate();

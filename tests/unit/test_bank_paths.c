@@ -131,6 +131,14 @@ static void test_refusals(void **state)
     assert_int_equal(hstpf_resistance_band(NULL, 10.0, &w, &sd), HSTPF_E_NULL);
     assert_int_equal(hstpf_resistance_band(&e, NAN, &w, &sd), HSTPF_E_NONFINITE);
     assert_true(w == -1.0 && sd == -1.0);
+    /* an estimate whose covariance or theta is not finite has no band (a NaN
+     * variance once read as a band of width 0) */
+    e.theta_cov[5] = NAN;
+    assert_int_equal(hstpf_resistance_band(&e, 10.0, &w, &sd), HSTPF_E_NONFINITE);
+    e.theta_cov[5] = 0.0f;
+    e.theta[1] = INFINITY;
+    assert_int_equal(hstpf_resistance_band(&e, 10.0, &w, &sd), HSTPF_E_NONFINITE);
+    assert_true(w == -1.0 && sd == -1.0);
 }
 
 /* A point theta (zero covariance, as a declared row publishes): W by hand,

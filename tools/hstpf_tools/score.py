@@ -28,8 +28,9 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from . import cli, e2e, runconfig
-from .frames import (EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS,
-                     HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE, FrameCodec, type_name)
+from .frames import (BAND_SPEEDS_KMH, EST_BAND, EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIT_NAMES,
+                     FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE,
+                     FrameCodec, type_name)
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
@@ -60,8 +61,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     """Decoded output series with simulation times. speed: the replay's
     speed-up (None: 1 for time alignment; measured from the inputs for
     inputs alignment)."""
-    series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], HEALTH_RX: [],
-                               HEALTH_SYS: [], HEALTH_TIME: []}
+    series: Dict[str, List] = {EST_STATE: [], EST_QUALITY: [], EST_TYPE: [], EST_THETA: [], EST_BAND: [],
+                               HEALTH_RX: [], HEALTH_SYS: [], HEALTH_TIME: []}
     t_sim: Optional[float] = None
     t_in: Optional[float] = None  # bus time of the latest matched input
     e2e_results: Dict[str, Dict[str, int]] = {}
@@ -230,6 +231,8 @@ def metrics(series, truth) -> dict:
         res["final_status"] = STATUS_NAMES[min(int(ty[-1][1]["TypeStatus"]), len(STATUS_NAMES) - 1)]
         res["final_leader"] = type_name(int(ty[-1][1]["LeaderType"]))
         res["final_leader_weight"] = float(ty[-1][1]["LeaderWeight"])
+        if "FitStatus" in ty[-1][1]:
+            res["final_fit"] = FIT_NAMES[min(int(ty[-1][1]["FitStatus"]), len(FIT_NAMES) - 1)]
         if last != TYPE_NONE:
             declared = type_name(last)
             decision = ty[-1][0]
@@ -249,6 +252,12 @@ def metrics(series, truth) -> dict:
         res["final_theta"] = e.tolist()
         res["theta_rel_err"] = ((e - true) / true).tolist()
         res["w_rms_rel_err"] = w_rms_rel(est, th_true)
+        bands = [s for t, s in series[EST_BAND] if s["BandValid"] >= 0.5]
+        if bands:
+            # the final band around the final W(v): the share of 0..350 km/h where it holds the truth
+            v = V_GRID_KMH / 3.6
+            half = Z95 * band_sd(bands[-1], V_GRID_KMH)
+            res["w_band_coverage"] = float(np.mean(np.abs(est.resistance(v) - th_true.resistance(v)) <= half))
         if decision is not None:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
@@ -277,6 +286,15 @@ def sd_series(series, pattern: str) -> Optional[Tuple[np.ndarray, np.ndarray]]:
         if ok.any():
             return t[ok], sd[ok]
     return None
+
+
+def band_sd(band: Dict[str, float], v_kmh) -> np.ndarray:
+    """The sd of W(v) at speeds v_kmh from one EstBand frame's WSd0..WSd4.
+    sd(V)^2 = h' Cov h with h = (1, V, V^2) is a polynomial of degree 4 in V,
+    so its values at the five BAND_SPEEDS_KMH give it exactly everywhere."""
+    sd2 = np.array([float(band[f"WSd{k}"]) ** 2 for k in range(len(BAND_SPEEDS_KMH))])
+    poly = np.polynomial.Polynomial.fit(np.array(BAND_SPEEDS_KMH), sd2, len(BAND_SPEEDS_KMH) - 1)
+    return np.sqrt(np.maximum(poly(np.asarray(v_kmh, dtype=float)), 0.0))
 
 
 SD_SIGNALS = {  # signal-name patterns of the published standard deviations
@@ -379,7 +397,12 @@ def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Op
         w_est = est.resistance(vk / 3.6)
         ax.plot(vk, w_est, "--", label="estimate (final)")
         sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
-        if all(x is not None for x in sds):
+        bands = [b for _, b in series.get(EST_BAND, []) if b["BandValid"] >= 0.5]
+        if bands:
+            band = Z95 * band_sd(bands[-1], vk)
+            ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
+                            label="95 % band (EstBand)")
+        elif all(x is not None for x in sds):
             # final sd of each coefficient; their covariances are not published, so this band treats
             # them as independent: var W = sum_k (V^k sd_k)^2
             band = Z95 * np.sqrt(sum((vk ** k * x[1][-1]) ** 2 for k, x in enumerate(sds)))

@@ -619,7 +619,8 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
  * @brief Running resistance W(v) of an estimate's theta and its standard
  * deviation from theta_cov: W = h'theta, sd^2 = h' Cov h, h = (1, V, V^2),
  * V = 3.6 v km/h. A 95 % band is W +- 1.96 sd.
- * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_NONFINITE (v). Cost O(1).
+ * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_NONFINITE (v, or the estimate's
+ *   W or variance at v not finite: *w and *sd are then unchanged). Cost O(1).
  */
 int32_t hstpf_resistance_band(const hstpf_estimate_t *e, double v_mps, double *w, double *sd);
 

@@ -963,6 +963,7 @@ int hstpf_can_est_type_pack(
     dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->type_status, 4u, 0x30u);
+    dst_p[1] |= pack_left_shift_u8(src_p->fit_status, 6u, 0xc0u);
     dst_p[2] |= pack_left_shift_u8(src_p->declared_type, 0u, 0xffu);
     dst_p[3] |= pack_left_shift_u16(src_p->declared_weight, 0u, 0xffu);
     dst_p[4] |= pack_right_shift_u16(src_p->declared_weight, 8u, 0xffu);
@@ -985,6 +986,7 @@ int hstpf_can_est_type_unpack(
     dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->type_status = unpack_right_shift_u8(src_p[1], 4u, 0x30u);
+    dst_p->fit_status = unpack_right_shift_u8(src_p[1], 6u, 0xc0u);
     dst_p->declared_type = unpack_right_shift_u8(src_p[2], 0u, 0xffu);
     dst_p->declared_weight = unpack_right_shift_u16(src_p[3], 0u, 0xffu);
     dst_p->declared_weight |= unpack_left_shift_u16(src_p[4], 8u, 0xffu);
@@ -1062,6 +1064,26 @@ bool hstpf_can_est_type_type_status_is_in_range(uint8_t value)
 }
 
 bool hstpf_can_est_type_type_status_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 3.0));
+}
+
+uint8_t hstpf_can_est_type_fit_status_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_type_fit_status_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_type_fit_status_is_in_range(uint8_t value)
+{
+    return (value <= 3u);
+}
+
+bool hstpf_can_est_type_fit_status_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 3.0));
 }
@@ -1353,6 +1375,275 @@ bool hstpf_can_est_theta_c2_is_in_range(uint16_t value)
 bool hstpf_can_est_theta_c2_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 0.0013107));
+}
+
+int hstpf_can_est_band_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_est_band_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[1] |= pack_left_shift_u8(src_p->band_valid, 4u, 0x10u);
+    dst_p[1] |= pack_left_shift_u8(src_p->band_fault, 5u, 0x20u);
+    dst_p[1] |= pack_left_shift_u16(src_p->w_sd0, 6u, 0xc0u);
+    dst_p[2] |= pack_right_shift_u16(src_p->w_sd0, 2u, 0x7fu);
+    dst_p[2] |= pack_left_shift_u16(src_p->w_sd1, 7u, 0x80u);
+    dst_p[3] |= pack_right_shift_u16(src_p->w_sd1, 1u, 0xffu);
+    dst_p[4] |= pack_left_shift_u16(src_p->w_sd2, 0u, 0xffu);
+    dst_p[5] |= pack_right_shift_u16(src_p->w_sd2, 8u, 0x01u);
+    dst_p[5] |= pack_left_shift_u16(src_p->w_sd3, 1u, 0xfeu);
+    dst_p[6] |= pack_right_shift_u16(src_p->w_sd3, 7u, 0x03u);
+    dst_p[6] |= pack_left_shift_u16(src_p->w_sd4, 2u, 0xfcu);
+    dst_p[7] |= pack_right_shift_u16(src_p->w_sd4, 6u, 0x07u);
+    dst_p[7] |= pack_left_shift_u8(src_p->off_what, 3u, 0x78u);
+
+    return (8);
+}
+
+int hstpf_can_est_band_unpack(
+    struct hstpf_can_est_band_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->band_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->band_fault = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
+    dst_p->w_sd0 = unpack_right_shift_u16(src_p[1], 6u, 0xc0u);
+    dst_p->w_sd0 |= unpack_left_shift_u16(src_p[2], 2u, 0x7fu);
+    dst_p->w_sd1 = unpack_right_shift_u16(src_p[2], 7u, 0x80u);
+    dst_p->w_sd1 |= unpack_left_shift_u16(src_p[3], 1u, 0xffu);
+    dst_p->w_sd2 = unpack_right_shift_u16(src_p[4], 0u, 0xffu);
+    dst_p->w_sd2 |= unpack_left_shift_u16(src_p[5], 8u, 0x01u);
+    dst_p->w_sd3 = unpack_right_shift_u16(src_p[5], 1u, 0xfeu);
+    dst_p->w_sd3 |= unpack_left_shift_u16(src_p[6], 7u, 0x03u);
+    dst_p->w_sd4 = unpack_right_shift_u16(src_p[6], 2u, 0xfcu);
+    dst_p->w_sd4 |= unpack_left_shift_u16(src_p[7], 6u, 0x07u);
+    dst_p->off_what = unpack_right_shift_u8(src_p[7], 3u, 0x78u);
+
+    return (0);
+}
+
+int hstpf_can_est_band_init(struct hstpf_can_est_band_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_est_band_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_est_band_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_band_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_band_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_est_band_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_est_band_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_band_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_band_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_est_band_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint8_t hstpf_can_est_band_band_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_band_band_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_band_band_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_band_band_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_est_band_band_fault_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_band_band_fault_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_band_band_fault_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_est_band_band_fault_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint16_t hstpf_can_est_band_w_sd0_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.05)));
+}
+
+double hstpf_can_est_band_w_sd0_decode(uint16_t value)
+{
+    return ((double)value * 0.05);
+}
+
+bool hstpf_can_est_band_w_sd0_is_in_range(uint16_t value)
+{
+    return (value <= 511u);
+}
+
+bool hstpf_can_est_band_w_sd0_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 25.55));
+}
+
+uint16_t hstpf_can_est_band_w_sd1_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.05)));
+}
+
+double hstpf_can_est_band_w_sd1_decode(uint16_t value)
+{
+    return ((double)value * 0.05);
+}
+
+bool hstpf_can_est_band_w_sd1_is_in_range(uint16_t value)
+{
+    return (value <= 511u);
+}
+
+bool hstpf_can_est_band_w_sd1_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 25.55));
+}
+
+uint16_t hstpf_can_est_band_w_sd2_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.05)));
+}
+
+double hstpf_can_est_band_w_sd2_decode(uint16_t value)
+{
+    return ((double)value * 0.05);
+}
+
+bool hstpf_can_est_band_w_sd2_is_in_range(uint16_t value)
+{
+    return (value <= 511u);
+}
+
+bool hstpf_can_est_band_w_sd2_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 25.55));
+}
+
+uint16_t hstpf_can_est_band_w_sd3_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.05)));
+}
+
+double hstpf_can_est_band_w_sd3_decode(uint16_t value)
+{
+    return ((double)value * 0.05);
+}
+
+bool hstpf_can_est_band_w_sd3_is_in_range(uint16_t value)
+{
+    return (value <= 511u);
+}
+
+bool hstpf_can_est_band_w_sd3_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 25.55));
+}
+
+uint16_t hstpf_can_est_band_w_sd4_encode(double value)
+{
+    return (uint16_t)(cantools_unsigned_from_double(round(value / 0.05)));
+}
+
+double hstpf_can_est_band_w_sd4_decode(uint16_t value)
+{
+    return ((double)value * 0.05);
+}
+
+bool hstpf_can_est_band_w_sd4_is_in_range(uint16_t value)
+{
+    return (value <= 511u);
+}
+
+bool hstpf_can_est_band_w_sd4_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 25.55));
+}
+
+uint8_t hstpf_can_est_band_off_what_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_est_band_off_what_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_est_band_off_what_is_in_range(uint8_t value)
+{
+    return (value <= 15u);
+}
+
+bool hstpf_can_est_band_off_what_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 15.0));
 }
 
 int hstpf_can_health_rx_pack(

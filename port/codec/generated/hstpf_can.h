@@ -51,6 +51,7 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_FRAME_ID (0x201u)
 #define HSTPF_CAN_EST_TYPE_FRAME_ID (0x210u)
 #define HSTPF_CAN_EST_THETA_FRAME_ID (0x211u)
+#define HSTPF_CAN_EST_BAND_FRAME_ID (0x212u)
 #define HSTPF_CAN_HEALTH_RX_FRAME_ID (0x220u)
 #define HSTPF_CAN_HEALTH_SYS_FRAME_ID (0x221u)
 #define HSTPF_CAN_HEALTH_TIME_FRAME_ID (0x222u)
@@ -62,6 +63,7 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_LENGTH (8u)
 #define HSTPF_CAN_EST_TYPE_LENGTH (8u)
 #define HSTPF_CAN_EST_THETA_LENGTH (8u)
+#define HSTPF_CAN_EST_BAND_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_RX_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_SYS_LENGTH (8u)
 #define HSTPF_CAN_HEALTH_TIME_LENGTH (8u)
@@ -73,6 +75,7 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_TYPE_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_THETA_IS_EXTENDED (0)
+#define HSTPF_CAN_EST_BAND_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_RX_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_SYS_IS_EXTENDED (0)
 #define HSTPF_CAN_HEALTH_TIME_IS_EXTENDED (0)
@@ -84,6 +87,7 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_EST_TYPE_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_EST_THETA_CYCLE_TIME_MS (1000u)
+#define HSTPF_CAN_EST_BAND_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_RX_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_SYS_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_HEALTH_TIME_CYCLE_TIME_MS (1000u)
@@ -125,6 +129,11 @@ extern "C" {
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_DECLARED_CHOICE (1u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_CHANGED_CHOICE (2u)
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_WITHDRAWN_CHOICE (3u)
+
+#define HSTPF_CAN_EST_TYPE_FIT_STATUS_UNKNOWN_CHOICE (0u)
+#define HSTPF_CAN_EST_TYPE_FIT_STATUS_TABLE_CHOICE (1u)
+#define HSTPF_CAN_EST_TYPE_FIT_STATUS_NO_TYPE_FITS_CHOICE (2u)
+#define HSTPF_CAN_EST_TYPE_FIT_STATUS_RESERVED_CHOICE (3u)
 
 #define HSTPF_CAN_EST_TYPE_DECLARED_TYPE_CRH1_CHOICE (0u)
 #define HSTPF_CAN_EST_TYPE_DECLARED_TYPE_CRH2_CHOICE (1u)
@@ -169,6 +178,12 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_THETA_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_EST_THETA_THETA_VALID_VALID_CHOICE (1u)
 
+#define HSTPF_CAN_EST_BAND_BAND_VALID_INVALID_CHOICE (0u)
+#define HSTPF_CAN_EST_BAND_BAND_VALID_VALID_CHOICE (1u)
+
+#define HSTPF_CAN_EST_BAND_BAND_FAULT_NONE_CHOICE (0u)
+#define HSTPF_CAN_EST_BAND_BAND_FAULT_CLAMPED_CHOICE (1u)
+
 /* Frame Names. */
 #define HSTPF_CAN_POSITION_NAME "Position"
 #define HSTPF_CAN_TRACTION_NAME "Traction"
@@ -176,6 +191,7 @@ extern "C" {
 #define HSTPF_CAN_EST_QUALITY_NAME "EstQuality"
 #define HSTPF_CAN_EST_TYPE_NAME "EstType"
 #define HSTPF_CAN_EST_THETA_NAME "EstTheta"
+#define HSTPF_CAN_EST_BAND_NAME "EstBand"
 #define HSTPF_CAN_HEALTH_RX_NAME "HealthRx"
 #define HSTPF_CAN_HEALTH_SYS_NAME "HealthSys"
 #define HSTPF_CAN_HEALTH_TIME_NAME "HealthTime"
@@ -210,6 +226,7 @@ extern "C" {
 #define HSTPF_CAN_EST_TYPE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_TYPE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_TYPE_TYPE_STATUS_NAME "TypeStatus"
+#define HSTPF_CAN_EST_TYPE_FIT_STATUS_NAME "FitStatus"
 #define HSTPF_CAN_EST_TYPE_DECLARED_TYPE_NAME "DeclaredType"
 #define HSTPF_CAN_EST_TYPE_DECLARED_WEIGHT_NAME "DeclaredWeight"
 #define HSTPF_CAN_EST_TYPE_LEADER_TYPE_NAME "LeaderType"
@@ -221,6 +238,16 @@ extern "C" {
 #define HSTPF_CAN_EST_THETA_C0_NAME "C0"
 #define HSTPF_CAN_EST_THETA_C1_NAME "C1"
 #define HSTPF_CAN_EST_THETA_C2_NAME "C2"
+#define HSTPF_CAN_EST_BAND_E2E_CRC_NAME "E2eCrc"
+#define HSTPF_CAN_EST_BAND_E2E_COUNTER_NAME "E2eCounter"
+#define HSTPF_CAN_EST_BAND_BAND_VALID_NAME "BandValid"
+#define HSTPF_CAN_EST_BAND_BAND_FAULT_NAME "BandFault"
+#define HSTPF_CAN_EST_BAND_W_SD0_NAME "WSd0"
+#define HSTPF_CAN_EST_BAND_W_SD1_NAME "WSd1"
+#define HSTPF_CAN_EST_BAND_W_SD2_NAME "WSd2"
+#define HSTPF_CAN_EST_BAND_W_SD3_NAME "WSd3"
+#define HSTPF_CAN_EST_BAND_W_SD4_NAME "WSd4"
+#define HSTPF_CAN_EST_BAND_OFF_WHAT_NAME "OffWhat"
 #define HSTPF_CAN_HEALTH_RX_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_HEALTH_RX_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_HEALTH_RX_POS_STALE_NAME "PosStale"
@@ -533,6 +560,15 @@ struct hstpf_can_est_type_t {
     uint8_t type_status;
 
     /**
+     * Whether the data fit a row of Table 1 (hstpf_fit_t): 0 not decided, 1 a table type is declared, 2 no table type fits (the continuous hypothesis holds: the train is near the table but on no row, or the innovations fit no hypothesis; EstBand.OffWhat says what is off), 3 not used.
+     *
+     * Range: 0..3 (0..3 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t fit_status;
+
+    /**
      * Table 1 row index of the declared type (0 = CRH1 .. 16 = China Star), 254 custom row, 255 none.
      *
      * Range: 0..255 (0..255 -)
@@ -635,6 +671,101 @@ struct hstpf_can_est_theta_t {
      * Offset: 0
      */
     uint16_t c2;
+};
+
+/**
+ * Signals in message EstBand.
+ *
+ * The 95 % band of the running resistance W(v) = c0 + c1 V + c2 V^2 of EstTheta: the standard deviation of W at V = 0, 87.5, 175, 262.5 and 350 km/h (the mixture over the rows, each with its spread, and the continuous hypothesis). sd(V)^2 is a polynomial of degree 4 in V, so these five values give it exactly at every speed (Lagrange interpolation of the squares); the band is W +- 1.96 sd. Cycle 1000 ms, for the same step as EstTheta.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct hstpf_can_est_band_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_crc;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_counter;
+
+    /**
+     * 1: every WSd value is finite and within its range and the estimate is valid. 0: do not use WSd0..WSd4.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t band_valid;
+
+    /**
+     * 1: a standard deviation was non-finite (sent as 0) or clipped to its range; BandValid is then 0.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t band_fault;
+
+    /**
+     * Standard deviation of W(v) at 0 km/h.
+     *
+     * Range: 0..511 (0..25.55 N/kN)
+     * Scale: 0.05
+     * Offset: 0
+     */
+    uint16_t w_sd0;
+
+    /**
+     * Standard deviation of W(v) at 87.5 km/h.
+     *
+     * Range: 0..511 (0..25.55 N/kN)
+     * Scale: 0.05
+     * Offset: 0
+     */
+    uint16_t w_sd1;
+
+    /**
+     * Standard deviation of W(v) at 175 km/h.
+     *
+     * Range: 0..511 (0..25.55 N/kN)
+     * Scale: 0.05
+     * Offset: 0
+     */
+    uint16_t w_sd2;
+
+    /**
+     * Standard deviation of W(v) at 262.5 km/h.
+     *
+     * Range: 0..511 (0..25.55 N/kN)
+     * Scale: 0.05
+     * Offset: 0
+     */
+    uint16_t w_sd3;
+
+    /**
+     * Standard deviation of W(v) at 350 km/h.
+     *
+     * Range: 0..511 (0..25.55 N/kN)
+     * Scale: 0.05
+     * Offset: 0
+     */
+    uint16_t w_sd4;
+
+    /**
+     * With FitStatus 2, what is off (hstpf_estimate_t.off_what, bits): 1 the Davis coefficients are off every row, 2 mostly c0 (a constant offset, gradient-like), 4 the reported traction's gain, 8 the innovations fit no hypothesis; 0 otherwise.
+     *
+     * Range: 0..15 (0..15 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t off_what;
 };
 
 /**
@@ -2193,6 +2324,46 @@ bool hstpf_can_est_type_type_status_is_in_phys_range(double value);
  *
  * @return Encoded signal.
  */
+uint8_t hstpf_can_est_type_fit_status_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_type_fit_status_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_type_fit_status_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_type_fit_status_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
 uint8_t hstpf_can_est_type_declared_type_encode(double value);
 
 /**
@@ -2662,6 +2833,443 @@ bool hstpf_can_est_theta_c2_is_in_range(uint16_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_est_theta_c2_is_in_phys_range(double value);
+
+/**
+ * Pack message EstBand.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int hstpf_can_est_band_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_est_band_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message EstBand.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int hstpf_can_est_band_unpack(
+    struct hstpf_can_est_band_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from EstBand.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int hstpf_can_est_band_init(struct hstpf_can_est_band_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_band_e2e_crc_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_e2e_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_e2e_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_e2e_crc_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_band_e2e_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_e2e_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_e2e_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_e2e_counter_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_band_band_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_band_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_band_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_band_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_band_band_fault_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_band_fault_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_band_fault_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_band_fault_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_band_w_sd0_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_w_sd0_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd0_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd0_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_band_w_sd1_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_w_sd1_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd1_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd1_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_band_w_sd2_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_w_sd2_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd2_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd2_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_band_w_sd3_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_w_sd3_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd3_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd3_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint16_t hstpf_can_est_band_w_sd4_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_w_sd4_decode(uint16_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd4_is_in_range(uint16_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_w_sd4_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_est_band_off_what_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_est_band_off_what_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_off_what_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_est_band_off_what_is_in_phys_range(double value);
 
 /**
  * Pack message HealthRx.

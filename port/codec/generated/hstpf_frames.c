@@ -10,6 +10,7 @@ const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
     {0x201u, 0x2107u, 8u, 100u, 3u, 5000u, "EstQuality"},
     {0x210u, 0x2102u, 8u, 1000u, 3u, 5000u, "EstType"},
     {0x211u, 0x2103u, 8u, 1000u, 3u, 5000u, "EstTheta"},
+    {0x212u, 0x2108u, 8u, 1000u, 3u, 5000u, "EstBand"},
     {0x220u, 0x2104u, 8u, 1000u, 3u, 5000u, "HealthRx"},
     {0x221u, 0x2105u, 8u, 1000u, 3u, 5000u, "HealthSys"},
     {0x222u, 0x2106u, 8u, 1000u, 3u, 5000u, "HealthTime"},
@@ -156,6 +157,11 @@ uint8_t hstpf_frames_est_type_type_status_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
 }
 
+uint8_t hstpf_frames_est_type_fit_status_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 3.0);
+}
+
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys)
 {
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 255.0);
@@ -199,6 +205,46 @@ uint16_t hstpf_frames_est_theta_c1_raw(double phys)
 uint16_t hstpf_frames_est_theta_c2_raw(double phys)
 {
     return (uint16_t)raw_sat(phys, 2e-08, 0.0, 0.0, 65535.0);
+}
+
+uint8_t hstpf_frames_est_band_band_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint8_t hstpf_frames_est_band_band_fault_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint16_t hstpf_frames_est_band_w_sd0_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.05, 0.0, 0.0, 511.0);
+}
+
+uint16_t hstpf_frames_est_band_w_sd1_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.05, 0.0, 0.0, 511.0);
+}
+
+uint16_t hstpf_frames_est_band_w_sd2_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.05, 0.0, 0.0, 511.0);
+}
+
+uint16_t hstpf_frames_est_band_w_sd3_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.05, 0.0, 0.0, 511.0);
+}
+
+uint16_t hstpf_frames_est_band_w_sd4_raw(double phys)
+{
+    return (uint16_t)raw_sat(phys, 0.05, 0.0, 0.0, 511.0);
+}
+
+uint8_t hstpf_frames_est_band_off_what_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 15.0);
 }
 
 uint8_t hstpf_frames_health_rx_pos_stale_raw(double phys)

@@ -18,7 +18,7 @@ extern "C" {
 #define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
 
 /** Number of frames in hstpf_frames[]. */
-#define HSTPF_FRAMES_COUNT 9u
+#define HSTPF_FRAMES_COUNT 10u
 
 /* Position: Measured train position along the run. */
 #define HSTPF_FRAME_POSITION_ID 0x100u
@@ -67,6 +67,14 @@ extern "C" {
 #define HSTPF_FRAME_EST_THETA_CYCLE_MS 1000u
 #define HSTPF_FRAME_EST_THETA_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_EST_THETA_E2E_TIMEOUT_MS 5000u
+
+/* EstBand: The 95 % band of the running resistance W(v) = c0 + c1 V + c2 V^2 of EstTheta: the standard deviation of W at V = 0, 87. */
+#define HSTPF_FRAME_EST_BAND_ID 0x212u
+#define HSTPF_FRAME_EST_BAND_DATA_ID 0x2108u
+#define HSTPF_FRAME_EST_BAND_LENGTH 8u
+#define HSTPF_FRAME_EST_BAND_CYCLE_MS 1000u
+#define HSTPF_FRAME_EST_BAND_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_EST_BAND_E2E_TIMEOUT_MS 5000u
 
 /* HealthRx: Receiver fault counts since start, summed over both input streams; each saturates at 4095. */
 #define HSTPF_FRAME_HEALTH_RX_ID 0x220u
@@ -161,6 +169,8 @@ uint16_t hstpf_frames_est_quality_speed_sd_raw(double phys);
 uint16_t hstpf_frames_est_quality_est_time_raw(double phys);
 /** EstType.TypeStatus: scale 1, [0, 3]. */
 uint8_t hstpf_frames_est_type_type_status_raw(double phys);
+/** EstType.FitStatus: scale 1, [0, 3]. */
+uint8_t hstpf_frames_est_type_fit_status_raw(double phys);
 /** EstType.DeclaredType: scale 1, [0, 255]. */
 uint8_t hstpf_frames_est_type_declared_type_raw(double phys);
 /** EstType.DeclaredWeight: scale 0.0001, [0, 1]. */
@@ -179,6 +189,22 @@ uint16_t hstpf_frames_est_theta_c0_raw(double phys);
 uint16_t hstpf_frames_est_theta_c1_raw(double phys);
 /** EstTheta.C2: scale 2e-08, [0, 0.0013107] N/kN/(km/h)^2. */
 uint16_t hstpf_frames_est_theta_c2_raw(double phys);
+/** EstBand.BandValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_band_band_valid_raw(double phys);
+/** EstBand.BandFault: scale 1, [0, 1]. */
+uint8_t hstpf_frames_est_band_band_fault_raw(double phys);
+/** EstBand.WSd0: scale 0.05, [0, 25.55] N/kN. */
+uint16_t hstpf_frames_est_band_w_sd0_raw(double phys);
+/** EstBand.WSd1: scale 0.05, [0, 25.55] N/kN. */
+uint16_t hstpf_frames_est_band_w_sd1_raw(double phys);
+/** EstBand.WSd2: scale 0.05, [0, 25.55] N/kN. */
+uint16_t hstpf_frames_est_band_w_sd2_raw(double phys);
+/** EstBand.WSd3: scale 0.05, [0, 25.55] N/kN. */
+uint16_t hstpf_frames_est_band_w_sd3_raw(double phys);
+/** EstBand.WSd4: scale 0.05, [0, 25.55] N/kN. */
+uint16_t hstpf_frames_est_band_w_sd4_raw(double phys);
+/** EstBand.OffWhat: scale 1, [0, 15]. */
+uint8_t hstpf_frames_est_band_off_what_raw(double phys);
 /** HealthRx.PosStale: scale 1, [0, 1]. */
 uint8_t hstpf_frames_health_rx_pos_stale_raw(double phys);
 /** HealthRx.TractStale: scale 1, [0, 1]. */

@@ -1,0 +1,31 @@
+"""EstBand: the five W(v) standard deviations give sd(V) exactly at every
+speed (hstpf-score's band_sd), and the speeds agree with the DBC."""
+import re
+
+import numpy as np
+import pytest
+
+from hstpf_tools.frames import BAND_SPEEDS_KMH, EST_BAND, load_db
+from hstpf_tools.score import band_sd
+
+
+def test_band_sd_is_exact_for_any_covariance():
+    rng = np.random.default_rng(7)
+    v = np.linspace(0.0, 400.0, 81)
+    for _ in range(20):
+        a = rng.normal(size=(3, 3)) * np.array([0.3, 0.003, 5e-5])  # scales of c0, c1, c2 (N/kN, per km/h, ...)
+        cov = a @ a.T  # positive semi-definite, correlated
+        h = lambda x: np.stack([np.ones_like(x), x, x * x])  # noqa: E731
+        want = np.sqrt(np.einsum("in,ij,jn->n", h(v), cov, h(v)))
+        s = np.array(BAND_SPEEDS_KMH)
+        frame = {f"WSd{k}": float(x) for k, x in enumerate(np.sqrt(np.einsum("in,ij,jn->n", h(s), cov, h(s))))}
+        # exact up to the fit's round-off, relative to the band's largest sd (sd^2 spans ~1e13 over 0-400 km/h)
+        assert band_sd(frame, v) == pytest.approx(want, rel=1e-6, abs=1e-6 * want.max())
+
+
+def test_band_speeds_match_the_dbc():
+    msg = load_db().get_message_by_name(EST_BAND)
+    said = [float(x) for x in re.findall(r"V = ([\d.]+), ([\d.]+), ([\d.]+), ([\d.]+) and ([\d.]+) km/h",
+                                          msg.comment)[0]]
+    assert said == list(BAND_SPEEDS_KMH)
+    assert [s.name for s in msg.signals if s.name.startswith("WSd")] == [f"WSd{k}" for k in range(5)]
