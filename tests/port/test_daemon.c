@@ -561,42 +561,41 @@ static void test_validity_json_and_frames(void **state)
     /* EstBand: the sd of W(v) from theta_cov (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2) at
      * 0, 87.5, .. 350 km/h. c0's variance alone: 0.2 N/kN at every speed (4 counts of 0.05) */
     {
-        struct hstpf_can_est_band_t b;
-        v_estimate();
-        memset(v_core.est.theta_cov, 0, sizeof v_core.est.theta_cov);
-        v_core.est.theta_cov[0] = 0.04f;
-        v_core.est.fit = HSTPF_FIT_NONE;
-        v_core.est.off_what = HSTPF_OFF_COEF | HSTPF_OFF_C0;
-        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
-        assert_int_equal(fo.id, HSTPF_FRAME_EST_BAND_ID);
-        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
-        assert_int_equal(b.band_valid, 1);
-        assert_int_equal(b.band_fault, 0);
-        assert_int_equal(b.w_sd0, 4u);
-        assert_int_equal(b.w_sd2, 4u);
-        assert_int_equal(b.w_sd4, 4u);
-        assert_int_equal(b.off_what, 3u);
-        v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
-        assert_int_equal(hstpf_can_est_type_unpack(&ty, fo.data, fo.len), 0);
-        assert_int_equal(ty.fit_status, 2u);
-        /* c2's variance 1e-6: sd 1e-3 V^2, 30.6 N/kN at 175 km/h: clipped and flagged; at
-         * 87.5 km/h sqrt(0.04 + 7.656^2) = 7.659 (153 counts); OffWhat only with no type fitting */
-        v_core.est.theta_cov[5] = 1e-6f;
-        v_core.est.fit = HSTPF_FIT_TABLE;
-        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
-        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
-        assert_int_equal(b.band_valid, 0);
-        assert_int_equal(b.band_fault, 1);
-        assert_int_equal(b.w_sd1, 153u);
-        assert_int_equal(b.w_sd2, 511u);
-        assert_int_equal(b.off_what, 0u);
-        /* a NaN covariance: not valid, flagged, sent as 0 */
-        v_core.est.theta_cov[5] = 0.0f / 0.0f;
-        v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
-        assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
-        assert_int_equal(b.band_valid, 0);
-        assert_int_equal(b.band_fault, 1);
-        assert_int_equal(b.w_sd4, 0u);
+        /* {c2's variance, fit} -> {valid, fault, WSd0..4, OffWhat}. c2's variance 1e-6: sd
+         * 1e-3 V^2, 30.6 N/kN at 175 km/h, clipped and flagged; at 87.5 km/h
+         * sqrt(0.04 + 7.656^2) = 7.659 (153 counts). A NaN covariance: not valid, flagged, 0.
+         * OffWhat only with no type fitting. */
+        static const struct {
+            float c2c2;
+            uint8_t fit;
+            unsigned valid, fault, sd[5], off;
+        } cases[3] = {{0.0f, HSTPF_FIT_NONE, 1, 0, {4, 4, 4, 4, 4}, 3},
+                      {1e-6f, HSTPF_FIT_TABLE, 0, 1, {4, 153, 511, 511, 511}, 0},
+                      {NAN, HSTPF_FIT_TABLE, 0, 1, {0, 0, 0, 0, 0}, 0}};
+        int k;
+        for (k = 0; k < 3; ++k) {
+            struct hstpf_can_est_band_t b;
+            v_estimate();
+            memset(v_core.est.theta_cov, 0, sizeof v_core.est.theta_cov);
+            v_core.est.theta_cov[0] = 0.04f;
+            v_core.est.theta_cov[5] = cases[k].c2c2;
+            v_core.est.fit = (hstpf_fit_t)cases[k].fit;
+            v_core.est.off_what = HSTPF_OFF_COEF | HSTPF_OFF_C0;
+            v_publish(out, fr, line, sizeof line, HSTPFD_OUT_BAND, &fs, &fo);
+            assert_int_equal(fo.id, HSTPF_FRAME_EST_BAND_ID);
+            assert_int_equal(hstpf_can_est_band_unpack(&b, fo.data, fo.len), 0);
+            assert_int_equal(b.band_valid, cases[k].valid);
+            assert_int_equal(b.band_fault, cases[k].fault);
+            assert_int_equal(b.w_sd0, cases[k].sd[0]);
+            assert_int_equal(b.w_sd1, cases[k].sd[1]);
+            assert_int_equal(b.w_sd2, cases[k].sd[2]);
+            assert_int_equal(b.w_sd3, cases[k].sd[3]);
+            assert_int_equal(b.w_sd4, cases[k].sd[4]);
+            assert_int_equal(b.off_what, cases[k].off);
+            v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+            assert_int_equal(hstpf_can_est_type_unpack(&ty, fo.data, fo.len), 0);
+            assert_int_equal(ty.fit_status, cases[k].fit);
+        }
         v_core.est.fit = HSTPF_FIT_UNKNOWN;
         memset(v_core.est.theta_cov, 0, sizeof v_core.est.theta_cov);
     }
