@@ -14,6 +14,8 @@
 extern const char *const hstpfd__err_names[11]; /* [-code], code -1..-10; [0] "other" */
 extern const char *const hstpfd__class_names[HSTPFD_ERR_N_CLASSES];
 const char *hstpfd__status_name(hstpf_status_t s);
+/* hstpf_fit_t in the stream and the summary: "unknown", "table", "none". */
+const char *hstpfd__fit_name(hstpf_fit_t fit);
 
 /* ---- JSON / CSV values (core_text.c) ---- */
 void hstpfd__json_str(FILE *fp, const char *s);

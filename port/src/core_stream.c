@@ -19,7 +19,7 @@ void hstpfd__stream_header(FILE *out, const hstpfd_config_t *cfg)
             hstpfd__csv_str(out, col);
         }
     }
-    fputc('\n', out);
+    fputs(",fit,off_what,q_offtable,cov_c0c0,cov_c0c1,cov_c0c2,cov_c1c1,cov_c1c2,cov_c2c2\n", out);
 }
 
 /* The separator before a field: "," in CSV, ,"key": in JSON. */
@@ -105,6 +105,12 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
             fputc(',', fp);
             hstpfd__out_num(fp, 1, (double)e->model[l].ess, 6);
         }
+        fprintf(fp, ",%s,%u,", hstpfd__fit_name(e->fit), (unsigned)e->off_what);
+        hstpfd__out_num(fp, 1, (double)e->q_offtable, 6);
+        for (l = 0; l < 6; ++l) {
+            fputc(',', fp);
+            hstpfd__out_num(fp, 1, (double)e->theta_cov[l], 6);
+        }
         fputc('\n', fp);
         return;
     }
@@ -113,7 +119,14 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
         fputs(l ? "," : "", fp);
         hstpfd__out_num(fp, 0, (double)e->theta[l], 9);
     }
-    fputs("],\"q\":[", fp);
+    fputs("],\"theta_cov\":[", fp);
+    for (l = 0; l < 6; ++l) {
+        fputs(l ? "," : "", fp);
+        hstpfd__out_num(fp, 0, (double)e->theta_cov[l], 6);
+    }
+    fprintf(fp, "],\"fit\":\"%s\",\"off_what\":%u,\"q_offtable\":", hstpfd__fit_name(e->fit), (unsigned)e->off_what);
+    hstpfd__out_num(fp, 0, (double)e->q_offtable, 6);
+    fputs(",\"q\":[", fp);
     for (l = 0; l < e->n_models; ++l) {
         fputs(l ? "," : "", fp);
         hstpfd__out_num(fp, 0, (double)e->model[l].q, 9);

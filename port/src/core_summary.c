@@ -63,7 +63,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     } else {
         fputs("null", fp);
     }
-    fprintf(fp, ",\"status\":\"%s\",\"decision_time_s\":", hstpfd__status_name(e->status));
+    fprintf(fp, ",\"status\":\"%s\",\"fit\":\"%s\",\"off_what\":%u,\"decision_time_s\":",
+            hstpfd__status_name(e->status), hstpfd__fit_name(e->fit), (unsigned)e->off_what);
     if (e->declared >= 0 && c->have_decision && c->had_fix) {
         hstpfd__json_num(fp, (double)(c->decision_t - c->t_first_fix) / 1e6);
         fputs(",\"decision_t\":", fp);

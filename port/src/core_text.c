@@ -42,6 +42,11 @@ const char *hstpfd__status_name(hstpf_status_t s)
     }
 }
 
+const char *hstpfd__fit_name(hstpf_fit_t fit)
+{
+    return fit == HSTPF_FIT_TABLE ? "table" : fit == HSTPF_FIT_NONE ? "none" : "unknown";
+}
+
 void hstpfd__json_str(FILE *fp, const char *s)
 {
     fputc('"', fp);

@@ -90,7 +90,7 @@ static int is(const char *section, const char *key, const char *text)
 static void test_clean_run(void **state)
 {
     const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T, 0, 0};
-    char line[512];
+    char line[4096];
     FILE *fp;
     int n = 0;
     (void)state;
@@ -121,6 +121,7 @@ static void test_clean_run(void **state)
     assert_int_equal((int)num("faults", "stale_events"), 0);
     assert_int_equal((int)num("faults", "position_stale"), 0);
     assert_true(is(NULL, "step_errors", "{}"));
+    assert_true(is(NULL, "fit", "\"table\""));
     /* the same line on stdout */
     read_file(DIR "/clean.stdout", line, sizeof line);
     assert_true(strncmp(line, "{\"summary\":\"hstpfd\"", 19) == 0);
@@ -129,8 +130,12 @@ static void test_clean_run(void **state)
     assert_non_null(fp);
     while (fgets(line, sizeof line, fp) != NULL) {
         assert_true(line[0] == '{' && strstr(line, "\"q\":[") != NULL);
+        assert_non_null(strstr(line, "\"theta_cov\":["));
+        assert_true(strstr(line, "\"fit\":\"unknown\"") != NULL || strstr(line, "\"fit\":\"table\"") != NULL);
         ++n;
     }
+    /* the last step: CRH3 declared, so the data fit its row */
+    assert_non_null(strstr(line, "\"fit\":\"table\",\"off_what\":0"));
     fclose(fp);
     assert_int_equal(n, 600);
 }
