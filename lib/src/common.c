@@ -6,7 +6,7 @@ const char *hstpf_strerror(int32_t err)
     case HSTPF_OK: return "ok";
     case HSTPF_E_NULL: return "required pointer is NULL";
     case HSTPF_E_INIT: return "instance not initialised";
-    case HSTPF_E_SIZE: return "count out of range";
+    case HSTPF_E_SIZE: return "count out of range, or workspace too small or misaligned";
     case HSTPF_E_NONFINITE: return "input is NaN or infinite";
     case HSTPF_E_DT: return "step length out of range";
     case HSTPF_E_RANGE: return "value outside physical range";

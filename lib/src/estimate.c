@@ -60,7 +60,7 @@ static int in_ranges(const hstpf_estimate_t *o)
 
 /* A row's spread for the band: its likelihood is computed at the nominal
  * coefficients, but a real train of that type is spread around them (load,
- * wear: refine_spread, docs/model.md) by more than the data can resolve
+ * wear, wind, coupling: refine_spread, docs/model.md) by more than the data can resolve
  * (Cramer-Rao, docs/results.md). Only with the continuous hypothesis on:
  * without it the rows are the paper's points. */
 static void row_spread(const hstpf_t *f, uint16_t l, double w, double *cov)

@@ -1,6 +1,7 @@
 /* The grid engine's internal interface, shared by engine_grid.c and the
  * grid_*.c files (one file per step of docs/grid.md). Not part of the API.
- * The memory is hstpf_t.grid (hstpf_grid_ws_t in hstpf.h); f->grid.work,
+ * The state is hstpf_t.grid (hstpf_grid_ws_t in hstpf.h); its cells p,
+ * rest, work and save point into the caller's workspace. f->grid.work,
  * row, ms, mv, ks, kv, vimg, first, last and box are scratch passed from
  * one step to the next within one model's pass. */
 #ifndef HSTPF_GRID_H

@@ -218,7 +218,7 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
             raw[k] = hstpf_frames_est_band_w_sd0_raw(v->have_fix && isfinite(sd) ? sd : 0.0);
         }
         (void)hstpf_can_est_band_init(&m);
-        m.band_valid = (uint8_t)(v->have_fix && v->valid && ok);
+        m.band_valid = (uint8_t)(v->have_fix && v->valid && v->sd_valid && ok);
         m.band_fault = (uint8_t)(v->have_fix && !ok);
         m.w_sd0 = raw[0];
         m.w_sd1 = raw[1];

@@ -29,3 +29,13 @@ def test_band_speeds_match_the_dbc():
                                           msg.comment)[0]]
     assert said == list(BAND_SPEEDS_KMH)
     assert [s.name for s in msg.signals if s.name.startswith("WSd")] == [f"WSd{k}" for k in range(5)]
+
+
+def test_band_pairs_only_with_its_own_step():
+    from hstpf_tools.score import band_at
+    ok = {f"WSd{k}": 0.2 for k in range(5)}
+    series = {EST_BAND: [(9.0, {**ok, "BandValid": 1}), (10.0, {**ok, "BandValid": 0})]}
+    assert band_at(series, 10.0) is None  # the step's band was not valid: no older one instead
+    series[EST_BAND].append((11.0, {**ok, "BandValid": 1, "WSd0": 0.3}))
+    assert band_at(series, 11.0)["WSd0"] == 0.3
+    assert band_at({}, 11.0) is None

@@ -66,7 +66,7 @@ typedef struct {
     int declared;             /* final declared model of the last pass (use of the result) */
 } result_t;
 
-static hstpf_t filt; /* static, as on a target; large for 17 x 1000 */
+static hstpf_t filt; /* static, as on a target */
 static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
 
 static int cmp_double(const void *a, const void *b)

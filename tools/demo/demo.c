@@ -7,7 +7,7 @@
 #include "hstpf/hstpf.h"
 #include "hstpf_sim.h"
 
-static hstpf_t filt; /* ~100 kB: static, as on a target */
+static hstpf_t filt; /* static, as on a target */
 static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
 
 static void usage(void)

@@ -23,7 +23,7 @@ EST_BAND = "EstBand"
 #: the speeds of EstBand's WSd0..WSd4, km/h (the DBC's comment of frame 530; port/src/frames.h)
 BAND_SPEEDS_KMH = (0.0, 87.5, 175.0, 262.5, 350.0)
 #: FitStatus values (hstpf_fit_t)
-FIT_NAMES = ("unknown", "table", "no type fits", "reserved")
+FIT_NAMES = ("unknown", "table", "none", "reserved")  # as hstpfd's stream and summary write them
 HEALTH_RX, HEALTH_SYS, HEALTH_TIME = "HealthRx", "HealthSys", "HealthTime"
 #: TypeStatus values (hstpf_status_t)
 STATUS_NAMES = ("undecided", "declared", "changed", "withdrawn")

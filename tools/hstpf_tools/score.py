@@ -252,11 +252,11 @@ def metrics(series, truth) -> dict:
         res["final_theta"] = e.tolist()
         res["theta_rel_err"] = ((e - true) / true).tolist()
         res["w_rms_rel_err"] = w_rms_rel(est, th_true)
-        bands = [s for t, s in series[EST_BAND] if s["BandValid"] >= 0.5]
-        if bands:
+        band = band_at(series, t_last)
+        if band is not None:
             # the final band around the final W(v): the share of 0..350 km/h where it holds the truth
             v = V_GRID_KMH / 3.6
-            half = Z95 * band_sd(bands[-1], V_GRID_KMH)
+            half = Z95 * band_sd(band, V_GRID_KMH)
             res["w_band_coverage"] = float(np.mean(np.abs(est.resistance(v) - th_true.resistance(v)) <= half))
         if decision is not None:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
@@ -286,6 +286,14 @@ def sd_series(series, pattern: str) -> Optional[Tuple[np.ndarray, np.ndarray]]:
         if ok.any():
             return t[ok], sd[ok]
     return None
+
+
+def band_at(series, t: float) -> Optional[Dict[str, float]]:
+    """The valid EstBand of the same step as the EstTheta at time t (the
+    daemon sends the two together), or None: a band is never paired with
+    another step's W(v)."""
+    near = [(abs(tb - t), s) for tb, s in series.get(EST_BAND, []) if s["BandValid"] >= 0.5 and abs(tb - t) < 0.05]
+    return min(near, key=lambda x: x[0])[1] if near else None
 
 
 def band_sd(band: Dict[str, float], v_kmh) -> np.ndarray:
@@ -397,9 +405,9 @@ def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Op
         w_est = est.resistance(vk / 3.6)
         ax.plot(vk, w_est, "--", label="estimate (final)")
         sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
-        bands = [b for _, b in series.get(EST_BAND, []) if b["BandValid"] >= 0.5]
-        if bands:
-            band = Z95 * band_sd(bands[-1], vk)
+        last_band = band_at(series, thf[-1][0])
+        if last_band is not None:
+            band = Z95 * band_sd(last_band, vk)
             ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
                             label="95 % band (EstBand)")
         elif all(x is not None for x in sds):

@@ -470,9 +470,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         wt.c0 += w->sc->grade_permille;
         r->w_rms = w_rms_rel(th, &wt);
         for (kv = 0; kv <= 70; ++kv) {
-            double wv, sd;
-            (void)hstpf_resistance_band(&est, 5.0 * kv / 3.6, &wv, &sd);
-            in_band += fabs(wv - hstpf_resistance(&wt, 5.0 * kv / 3.6)) <= 1.96 * sd;
+            double wv = 0.0, sd = 0.0;
+            /* no band (a non-finite estimate) covers nothing */
+            if (hstpf_resistance_band(&est, 5.0 * kv / 3.6, &wv, &sd) == HSTPF_OK) {
+                in_band += fabs(wv - hstpf_resistance(&wt, 5.0 * kv / 3.6)) <= 1.96 * sd;
+            }
         }
         r->band_covers = in_band >= 68; /* 95 % of the 71 speeds */
         r->nofit_end = est.fit == HSTPF_FIT_NONE;

@@ -352,8 +352,8 @@ typedef struct {
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
      *  of the rows and the continuous hypothesis. With cfg.refine each row
-     *  carries its spread (refine_spread x its coefficients: load and wear,
-     *  docs/model.md), a declared row too; without it the rows are points
+     *  carries its spread (refine_spread x its coefficients: load, wear,
+     *  wind, coupling; docs/model.md), a declared row too; without it the rows are points
      *  (0 when declared). hstpf_resistance_band() turns it into a band on
      *  W(v). */
     hstpf_real_t theta_cov[6];

@@ -7,8 +7,6 @@ extern char hstpf_sizeof_instance[sizeof(hstpf_t)];
 extern char hstpf_sizeof_estimate[sizeof(hstpf_estimate_t)];
 extern char hstpf_sizeof_model[sizeof(hstpf_model_t)];
 extern char hstpf_sizeof_dist[sizeof(hstpf_dist_t)];
-char hstpf_sizeof_ws_particle[HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)];
-char hstpf_sizeof_ws_grid[HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS)];
 extern char hstpf_sizeof_ws_particle[HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)];
 extern char hstpf_sizeof_ws_grid[HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS)];
 
