@@ -40,7 +40,7 @@ int hstpfd__est_valid(const hstpfd_core_t *c)
     return 1;
 }
 
-static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
+static void tx_values(const hstpfd_core_t *c, unsigned i, hstpfd_tx_values_t *v)
 {
     const hstpf_estimate_t *e = &c->est;
     const hstpf_e2e_counts_t *p = hstpf_e2e_rx_counts(&c->rx.pos);
@@ -81,7 +81,7 @@ static void tx_values(const hstpfd_core_t *c, hstpfd_tx_values_t *v)
     v->theta[2] = (double)e->theta[2];
     v->fit = (uint8_t)e->fit;
     v->off_what = (uint8_t)e->off_what;
-    {
+    if (i == HSTPFD_OUT_BAND) { /* five band evaluations, only for the frame that carries them */
         unsigned k;
         for (k = 0; k < HSTPFD_BAND_N; ++k) {
             double w = 0.0, sd = NAN; /* NaN unless the library gives it: never sent as valid */
@@ -109,7 +109,7 @@ void hstpfd__transmit(hstpfd_core_t *c, unsigned i)
 {
     hstpfd_tx_values_t v;
     hstpfd_frame_t f;
-    tx_values(c, &v);
+    tx_values(c, i, &v);
     if (hstpfd_tx_encode(&c->tx, i, &v, &f) != 0) {
         ++c->n.tx_errors;
         return;
