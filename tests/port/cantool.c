@@ -128,6 +128,9 @@ static int dump(const char *ifname, double seconds)
     if (s < 0) {
         return 1;
     }
+    /* whole lines only: the dump is ended by a signal, and a fully buffered
+     * stdout would leave a line cut at a 4 KiB boundary */
+    setvbuf(stdout, NULL, _IOLBF, 0);
     for (;;) {
         struct pollfd p;
         const int64_t left = end - mono_us();

@@ -82,7 +82,7 @@ seen = {i: 0 for i in data_id}
 bad = 0
 for line in open(sys.argv[2]):
     w = line.split()
-    if len(w) < 3 or '#' not in w[2]:
+    if not line.endswith('\n') or len(w) < 3 or '#' not in w[2]:
         continue  # the dump was stopped in the middle of a line
     i, d = w[2].split('#', 1)
     i = int(i, 16)
