@@ -78,7 +78,7 @@ typedef struct {
     hstpfd_counts_t n;
     /* the estimator's workspace: the engine comes from the configuration
      * file, so room for any (uint64_t: HSTPF_WORKSPACE_ALIGN) */
-    uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
+    uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)];
 } hstpfd_core_t;
 
 /* Initialises the core and the estimator *filt (caller-owned, static).

@@ -11,7 +11,7 @@
 #include "hstpf/hstpf.h"
 
 static hstpf_t filt;
-static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)];
 static hstpf_theta_t models[HSTPF_MAX_MODELS];
 static double tx[8], tp[8];
 

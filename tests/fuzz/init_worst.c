@@ -19,7 +19,7 @@ static double cpu_s(void)
 
 static hstpf_dist_t d;
 static hstpf_t filt;
-static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)];
 static double tx[HSTPF_DIST_TABLE_MAX], tp[HSTPF_DIST_TABLE_MAX];
 
 int main(void)

@@ -30,7 +30,7 @@
 #define N_PARTICLES 50
 
 static hstpf_t filt;
-static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)]; /* any engine */
 
 static uint64_t sm_state = UINT64_C(20240601);
 

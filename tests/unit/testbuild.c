@@ -20,7 +20,7 @@ void tu_config_rows(hstpf_config_t *c, hstpf_theta_t *models, const char *const 
 void tu_workspace(hstpf_config_t *c, int slot)
 {
     /* uint64_t: aligned to HSTPF_WORKSPACE_ALIGN */
-    static uint64_t ws[TU_WS_SLOTS][(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u];
+    static uint64_t ws[TU_WS_SLOTS][HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)];
     assert_true(slot >= 0 && slot < TU_WS_SLOTS);
     c->workspace = ws[slot];
     c->workspace_size = sizeof ws[slot];

@@ -67,7 +67,7 @@ typedef struct {
 } result_t;
 
 static hstpf_t filt; /* static, as on a target */
-static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)]; /* any engine */
 
 static int cmp_double(const void *a, const void *b)
 {

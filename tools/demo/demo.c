@@ -8,7 +8,7 @@
 #include "hstpf_sim.h"
 
 static hstpf_t filt; /* static, as on a target */
-static uint64_t ws[(HSTPF_WORKSPACE_MAX_BYTES + 7u) / 8u]; /* any engine */
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)]; /* any engine */
 
 static void usage(void)
 {

@@ -409,11 +409,17 @@ typedef struct {
 #define HSTPF_GRID_WS_BYTES(n_models)                                                                      \
     HSTPF__WS_ROUND(sizeof(hstpf_real_t) * (((size_t)(n_models) + 2u) * (size_t)HSTPF__GRID_CELLS +         \
                                             ((size_t)(n_models) + 1u) * (size_t)HSTPF_GRID_NS + 4u))
+/** Enough workspace for any engine with n_models models (and n_particles). */
+#define HSTPF_WORKSPACE_ANY_BYTES(n_models, n_particles)                                                   \
+    (HSTPF_PARTICLE_WS_BYTES(n_models, n_particles) > HSTPF_GRID_WS_BYTES(n_models)                       \
+         ? HSTPF_PARTICLE_WS_BYTES(n_models, n_particles)                                                 \
+         : HSTPF_GRID_WS_BYTES(n_models))
 /** The largest workspace any engine needs at the compile-time capacities. */
-#define HSTPF_WORKSPACE_MAX_BYTES                                                                          \
-    (HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES) > HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS) \
-         ? HSTPF_PARTICLE_WS_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)                                   \
-         : HSTPF_GRID_WS_BYTES(HSTPF_MAX_MODELS))
+#define HSTPF_WORKSPACE_MAX_BYTES HSTPF_WORKSPACE_ANY_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)
+
+/** uint64_t words for a static workspace of b bytes (8-aligned by its type):
+ *  static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_MAX_BYTES)]; */
+#define HSTPF_WORKSPACE_WORDS(b) ((((size_t)(b)) + 7u) / 8u)
 
 /* Private: the grid engine's state. The cells are in the workspace: p[l]
  * and rest[l] are model l's, work and save are scratch. */

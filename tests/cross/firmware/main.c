@@ -21,11 +21,8 @@
 
 static hstpf_t filt;
 /* the workspace for what this program runs: 3 models, 100 particles or
- * the grid (uint64_t: HSTPF_WORKSPACE_ALIGN) */
-#define WS_BYTES                                                                                        \
-    (HSTPF_PARTICLE_WS_BYTES(3, 100) > HSTPF_GRID_WS_BYTES(3) ? HSTPF_PARTICLE_WS_BYTES(3, 100)          \
-                                                               : HSTPF_GRID_WS_BYTES(3))
-static uint64_t ws[(WS_BYTES + 7u) / 8u];
+ * the grid */
+static uint64_t ws[HSTPF_WORKSPACE_WORDS(HSTPF_WORKSPACE_ANY_BYTES(3, 100))];
 static hstpf_input_t inputs[N_STEPS];
 
 static inline __attribute__((always_inline)) uint32_t *stack_pointer(void)
