@@ -624,6 +624,10 @@ static void test_workspace_size(void **state)
     assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
     assert_true(n == ((r * (5u * HSTPF_GRID_NS * HSTPF_GRID_NV + 4u * HSTPF_GRID_NS + 4u) + 7u) / 8u) * 8u);
     assert_true(n <= HSTPF_WORKSPACE_MAX_BYTES);
+    assert_true(n <= HSTPF_WORKSPACE_ANY_BYTES(3, 40));
+    assert_true(HSTPF_PARTICLE_WS_BYTES(3, 40) <= HSTPF_WORKSPACE_ANY_BYTES(3, 40));
+    assert_true(HSTPF_WORKSPACE_WORDS(n) * 8u == n); /* already rounded to 8 */
+    assert_true(HSTPF_WORKSPACE_WORDS(9u) == 2u);
     c.engine = HSTPF_ENGINE_KALMAN;
     assert_int_equal(hstpf_workspace_size(&c, &n), HSTPF_OK);
     assert_true(n == 0u);
