@@ -37,8 +37,8 @@ for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
 done
 echo "== the continuous hypothesis's prior weight: on-table speed against off-table safety"
-for q in 0.003 0.001; do
-  for s in paper1 off15 grade8; do
+for q in 0.03 0.02 0.003 0.001; do
+  for s in paper1 all17 off15 mass20 absent grade8; do
     "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tail -2 | tee "$out/$s-prior$q.txt"
   done
 done

@@ -68,3 +68,24 @@ def test_spread_rows(tmp_path):
     assert cells[3:10] == ["90.0%", "91.0%", "92.0%", "93.0%", "94.0%", "95.0%", "96.0%"]
     assert cells[10] == "2.5%"  # off15's own line
     assert table[3].startswith("| 0.4 | 209 / 291 / 706 |")
+
+
+def test_prior_rows(tmp_path):
+    # the default (0.01) reads the scenarios' own files, the others their -priorQ files (the
+    # -norefine paper1 file holds the CRH3 row alone); a value whose files are missing gets no row
+    crh3 = "CRH3                      100.0%     {}     291     706     274   0.0%   0.0%   0.00%   0.00%     0\n"
+    off = ("trains off the table: W(v) error at the end median 3.11% p90 13.54%; the 95% band covers "
+           "the truth in {}% of runs; 'no type fits' at the end in 0.0%; a type declared in {}% (refine on)\n")
+    for tag, x_med, base in (("", 208, 1), ("-prior0.03", 222, 5), ("-norefine", 207, 9)):
+        head = "" if tag == "-norefine" else "truth ...\n"
+        (tmp_path / f"paper1{tag}.txt").write_text(head + crh3.format(x_med))
+        (tmp_path / f"all17{tag}.txt").write_text(TOTAL + "\n")
+        for i, s in enumerate(["off15", "mass20", "absent", "grade8"]):
+            (tmp_path / f"{s}{tag}.txt").write_text(off.format(f"{80 + base + i}.0", f"{base + i}.5"))
+    table = rt.prior(tmp_path).splitlines()
+    assert len(table) == 5  # header, rule, 0.03, 0.01, off (no 0.02, 0.003, 0.001 files)
+    rows = [[c.strip() for c in ln.strip("|").split("|")] for ln in table[2:]]
+    assert [r[0] for r in rows] == ["0.03", "0.01 (default)", "off (`--no-refine`)"]
+    assert rows[1][1:] == ["208 / 291 / 706", "66.7%", "1.5%", "2.5%", "3.5%", "4.5%", "82.0%"]
+    assert rows[0][1] == "222 / 291 / 706" and rows[0][-1] == "86.0%"
+    assert rows[2][1] == "207 / 291 / 706" and rows[2][3] == "9.5%"

@@ -65,30 +65,26 @@ def offtable(d: Path) -> str:
 
 
 def prior(d: Path) -> str:
-    """The continuous hypothesis's prior weight: Case 1's decision against
-    off-table declarations (the default 0.01 is the scenarios' own run)."""
-    out = ["| `refine_prior_q` | Case 1 decision x_med / p90 / max [s] | off15: a type declared | "
-           "grade8: a type declared |", "|---|---|---|---|"]
-    rows = [("0.01 (default)", "paper1.txt", "off15.txt", "grade8.txt")]
-    rows += [(q, f"paper1-prior{q}.txt", f"off15-prior{q}.txt", f"grade8-prior{q}.txt") for q in ("0.003", "0.001")]
-    for label, p1, o15, g8 in rows:
-        if not all((d / f).exists() for f in (p1, o15, g8)):
+    """The continuous hypothesis's prior weight: identification on the table
+    (Case 1's decision, all17's success) against off-table declarations and
+    the band (the default 0.01 is the scenarios' own run)."""
+    off = ["off15", "mass20", "absent", "grade8"]
+    out = ["| `refine_prior_q` | Case 1 decision x_med / p90 / max [s] | all17: success | "
+           + " | ".join(f"{s}: a type declared" for s in off) + " | mass20: band covers |",
+           "|---|---|---|" + "---|" * len(off) + "---|"]
+    tags = [("0.03", "-prior0.03"), ("0.02", "-prior0.02"), ("0.01 (default)", ""),
+            ("0.003", "-prior0.003"), ("0.001", "-prior0.001"), ("off (`--no-refine`)", "-norefine")]
+    for label, tag in tags:
+        files = [d / f"{s}{tag}.txt" for s in ["paper1", "all17"] + off]
+        if not all(f.exists() for f in files):
             continue
-        hdr = last(d / p1, "truth ")
-        row = last(d / p1, "CRH3 ")
-        cols = dict(zip(hdr.split()[1:], row.split()[1:]))
-        out.append("| {} | {} / {} / {} | {} | {} |".format(
-            label, cols["x_med"], cols["x_p90"], cols["x_max"],
-            num(r"a type declared in ([\d.]+%)", last(d / o15, "trains off the table:")),
-            num(r"a type declared in ([\d.]+%)", last(d / g8, "trains off the table:"))))
-    f = d / "paper1-norefine.txt"
-    if f.exists():
-        hdr = "truth success x_med x_p90 x_max".split()
-        line = f.read_text().strip().splitlines()[-1].split()
-        out.append("| off (`--no-refine`) | {} / {} / {} | {} | {} |".format(
-            line[2], line[3], line[4],
-            num(r"a type declared in ([\d.]+%)", last(d / "off15-norefine.txt", "trains off the table:")),
-            num(r"a type declared in ([\d.]+%)", last(d / "grade8-norefine.txt", "trains off the table:"))))
+        # paper1: its CRH3 row (the -norefine file holds that row alone)
+        row = [ln for ln in files[0].read_text().splitlines() if ln.startswith("CRH3 ")][-1].split()
+        offt = [last(f, "trains off the table:") for f in files[2:]]
+        out.append("| {} | {} / {} / {} | {} | {} | {} |".format(
+            label, row[2], row[3], row[4], num(r"success ([\d.]+%)", last(files[1], "total:")),
+            " | ".join(num(r"a type declared in ([\d.]+%)", t) for t in offt),
+            num(r"covers the truth in ([\d.]+%)", offt[1])))
     return "\n".join(out)
 
 
