@@ -111,6 +111,16 @@ static void init_tables(hstpf_t *f, const hstpf_config_t *cfg)
         }
     }
     (void)hstpf_dist_init(&f->unit, &unit);
+    { /* the moments the Kalman filters use: exact for every kind */
+        const hstpf_dist_spec_t *sp[3] = {&cfg->noise_s, &cfg->noise_v, &cfg->noise_e};
+        const hstpf_dist_t *d[3] = {&f->ds, &f->dv, &f->de};
+        int i;
+        for (i = 0; i < 3; ++i) {
+            const int g = sp[i]->kind == HSTPF_DIST_GAUSSIAN;
+            f->noise_mom[2 * i] = g ? sp[i]->mean : (double)d[i]->mean;
+            f->noise_mom[2 * i + 1] = g ? sp[i]->sd : (double)d[i]->sd;
+        }
+    }
 }
 
 int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
@@ -147,8 +157,14 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     }
     f->xi = HSTPF_G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
     f->engine = (uint8_t)hstpf__engine_resolve(cfg);
+    /* Kalman: the rows' likelihoods are its own kind. Grid: through the
+     * yardstick (refine.c), sound only on Gaussian process noise: a
+     * heavy-tailed speed jump fits the hypothesis' free theta better than a
+     * row in the Gaussian yardstick (docs/model.md). Particles: no. */
     f->rf.active = (uint8_t)(cfg->refine && cfg->refine_prior_q > 0.0 &&
-                             f->engine == (uint8_t)HSTPF_ENGINE_KALMAN);
+                             (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN ||
+                              (f->engine == (uint8_t)HSTPF_ENGINE_GRID && cfg->noise_s.kind == HSTPF_DIST_GAUSSIAN &&
+                               cfg->noise_v.kind == HSTPF_DIST_GAUSSIAN)));
     for (l = 0; l < cfg->n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         f->theta[l] = cfg->models[l];
@@ -353,6 +369,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     e->predict_update(f, &st);
     if (f->rf.active) {
         hstpf__refine_update(f, &st);
+        if (hstpf__refine_yardstick(f)) {
+            hstpf__refine_anchor(f, &st);
+        }
     }
     {
         const int hold = weights_hold(f, in->dt_s);

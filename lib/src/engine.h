@@ -63,6 +63,15 @@ extern const hstpf__engine_t hstpf__engine_particle;
 extern const hstpf__engine_t hstpf__engine_kalman;
 extern const hstpf__engine_t hstpf__engine_grid;
 
+/* The Kalman engine's filter of one row on (s, v), m->kx and m->kp only,
+ * with the noise moments f->noise_mom. The grid engine runs it beside its
+ * cells as the continuous hypothesis' yardstick (refine.c). */
+void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
+/* One step; returns the log-likelihood increment (0 without a
+ * measurement), *held as hstpf_model_t.held, *floored 1 when the
+ * measurement was beyond the floor. */
+double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, uint8_t *held, int *floored);
+
 /* The engine of a validated configuration (AUTO resolved). */
 hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg);
 

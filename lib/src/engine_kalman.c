@@ -34,18 +34,19 @@ static double accel(hstpf_t *f, hstpf_model_t *m, double xu, double s, double v)
  *   v2 = (y2 - y1 - mu_s)/t + t a + mu_v + (e1 - e2 - w_s)/t + w_v,
  *   P = [R, R/t; R/t, (2R + Q_s)/t^2 + Q_v]. A single fix takes the
  * configured prior. The speed is then kept >= 0. */
-static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
     const hstpf_config_t *c = &f->cfg;
-    const double r = c->noise_e.sd * c->noise_e.sd;
-    m->kx[0] = q->y2 - c->noise_e.mean;
+    const double *nm = f->noise_mom;
+    const double r = nm[5] * nm[5];
+    m->kx[0] = q->y2 - nm[4];
     m->kp[0] = r;
     if (q->t12 > 0.0) {
         const double t = q->t12, sc = sqrt(t / c->dt_nominal_s);
-        const double qs = sc * sc * c->noise_s.sd * c->noise_s.sd;
-        const double qv = sc * sc * c->noise_v.sd * c->noise_v.sd;
-        const double v1 = (q->y2 - q->y1 - sc * c->noise_s.mean) / t;
-        m->kx[1] = v1 + t * accel(f, m, q->xu, m->kx[0], v1 > 0.0 ? v1 : 0.0) + sc * c->noise_v.mean;
+        const double qs = sc * sc * nm[1] * nm[1];
+        const double qv = sc * sc * nm[3] * nm[3];
+        const double v1 = (q->y2 - q->y1 - sc * nm[0]) / t;
+        m->kx[1] = v1 + t * accel(f, m, q->xu, m->kx[0], v1 > 0.0 ? v1 : 0.0) + sc * nm[2];
         m->kp[1] = r / t;
         m->kp[2] = (2.0 * r + qs) / (t * t) + qv;
     } else {
@@ -54,6 +55,11 @@ static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         m->kp[2] = c->init_speed_sd * c->init_speed_sd;
     }
     m->kx[1] = m->kx[1] > 0.0 ? m->kx[1] : 0.0;
+}
+
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+{
+    hstpf__kalman_place(f, m, q);
     m->held = 0;
     publish(f, m);
 }
@@ -73,18 +79,19 @@ static void place_all(hstpf_t *f, const hstpf__acq_t *a)
  * the particle engine's floor: at floor_depth nats below the peak it turns
  * into a slope of 1 nat per sd; beyond that point the innovation is clipped
  * for the update (Huber). */
-static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
+double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, uint8_t *held, int *floored)
 {
-    const hstpf_config_t *c = &f->cfg;
+    const double *nm = f->noise_mom;
     const double dt = st->dt, scale = st->scale;
     const double s = m->kx[0], v = m->kx[1];
     const double pss = m->kp[0], psv = m->kp[1], pvv = m->kp[2];
     const double sc2 = scale * scale;
     const double a = accel(f, m, st->xu, s, v);
-    double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v), ns, nv;
+    double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v), ns, nv, loglik = 0.0;
     double qss, qsv, qvv;
-    m->held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
-    if (m->held) {
+    *held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
+    *floored = 0;
+    if (*held) {
         /* at rest and nothing can start it: no motion, no process noise */
         ns = s;
         nv = 0.0;
@@ -94,37 +101,34 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     } else if (vd < 0.0) {
         /* comes to rest within the step: v' = 0 exactly; s' = s + dt v and
          * v' do not involve W, so for the weights this is standstill too */
-        m->held = 1;
-        ns = s + dt * v + scale * c->noise_s.mean;
+        *held = 1;
+        ns = s + dt * v + scale * nm[0];
         nv = 0.0;
-        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
+        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
         qsv = 0.0;
         qvv = 0.0;
     } else {
-        ns = s + dt * v + scale * c->noise_s.mean;
-        nv = vd + scale * c->noise_v.mean;
+        ns = s + dt * v + scale * nm[0];
+        nv = vd + scale * nm[2];
         /* P = F P F' + Q with F = [1 dt; 0 fvv] */
-        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * c->noise_s.sd * c->noise_s.sd;
+        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
         qsv = fvv * (psv + dt * pvv);
-        qvv = fvv * fvv * pvv + sc2 * c->noise_v.sd * c->noise_v.sd;
+        qvv = fvv * fvv * pvv + sc2 * nm[3] * nm[3];
     }
-    m->loglik = 0;
     if (st->has_y) {
-        const double sy = qss + c->noise_e.sd * c->noise_e.sd;
+        const double sy = qss + nm[5] * nm[5];
         const double sd = sqrt(sy);
         const double depth = (double)(f->de.lp_max - f->de.floor);
         const double zf = sqrt(2.0 * depth);
-        double z = (st->yr - c->noise_e.mean - ns) / sd, az = fabs(z), ll, ks, kv;
+        double z = (st->yr - nm[4] - ns) / sd, az = fabs(z), ll, ks, kv;
         if (az <= zf) {
             ll = -0.5 * z * z;
-            m->floor_run = 0;
         } else {
             ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
             z = z > 0.0 ? zf : -zf;
-            ++m->floor_hits;
-            ++m->floor_run;
+            *floored = 1;
         }
-        m->loglik = (real)(ll - 0.5 * log(6.283185307179586 * sy));
+        loglik = ll - 0.5 * log(6.283185307179586 * sy);
         ks = qss / sy;
         kv = qsv / sy;
         ns += ks * z * sd;
@@ -141,6 +145,22 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     m->kp[0] = qss;
     m->kp[1] = qsv;
     m->kp[2] = qvv;
+    return loglik;
+}
+
+static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
+{
+    int floored;
+    const double ll = hstpf__kalman_step(f, m, st, &m->held, &floored);
+    m->loglik = (real)ll;
+    if (st->has_y) {
+        if (floored) {
+            ++m->floor_hits;
+            ++m->floor_run;
+        } else {
+            m->floor_run = 0;
+        }
+    }
     publish(f, m);
 }
 

@@ -4,8 +4,9 @@
  * are linear in (c0, c1, c2, k) (Eq. 6), so the augmented EKF is close to
  * the exact conjugate update; its predictive density is the hypothesis'
  * likelihood, compared in the bank with the rows' (docs/model.md,
- * "Trains that are not on Table 1"). Kalman engine only: its likelihood is
- * exact there and comparable with the rows'. */
+ * "Trains that are not on Table 1"). On the Kalman engine the rows'
+ * likelihoods are the same kind; on the grid engine the hypothesis is
+ * scored through a yardstick (hstpf__refine_anchor). */
 #include <math.h>
 #include <string.h>
 
@@ -132,6 +133,7 @@ static void propagate(double *p, const double *f0, const double *f1, double qs, 
 void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
 {
     const hstpf_config_t *c = &f->cfg;
+    const double *nm = f->noise_mom;
     hstpf_refine_t *r = &f->rf;
     double *z = r->kz, *p = r->kp;
     const double dt = st->dt, sc2 = st->scale * st->scale, xi = f->xi;
@@ -155,9 +157,9 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         for (i = 0; i < NZ; ++i) {
             f1[i] = 0.0;
         }
-        z[0] += dt * v + st->scale * c->noise_s.mean;
+        z[0] += dt * v + st->scale * nm[0];
         z[1] = 0.0;
-        propagate(p, f0, f1, sc2 * c->noise_s.sd * c->noise_s.sd, 0.0);
+        propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
     } else {
         f1[0] = 0.0;
         f1[1] = 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
@@ -165,15 +167,15 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         f1[3] = -dt * xi * vk;
         f1[4] = -dt * xi * vk * vk;
         f1[5] = dt * st->xu;
-        z[0] += dt * v + st->scale * c->noise_s.mean;
-        z[1] = vd + st->scale * c->noise_v.mean;
-        propagate(p, f0, f1, sc2 * c->noise_s.sd * c->noise_s.sd, sc2 * c->noise_v.sd * c->noise_v.sd);
+        z[0] += dt * v + st->scale * nm[0];
+        z[1] = vd + st->scale * nm[2];
+        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3]);
     }
     r->loglik = 0.0;
     if (st->has_y) {
-        const double sy = p[0] + c->noise_e.sd * c->noise_e.sd, sd = sqrt(sy);
+        const double sy = p[0] + nm[5] * nm[5], sd = sqrt(sy);
         const double depth = (double)(f->de.lp_max - f->de.floor), zf = sqrt(2.0 * depth);
-        double zz = (st->yr - c->noise_e.mean - z[0]) / sd, az = fabs(zz), ll, gain[NZ];
+        double zz = (st->yr - nm[4] - z[0]) / sd, az = fabs(zz), ll, gain[NZ];
         int j;
         if (az <= zf) {
             ll = -0.5 * zz * zz;
@@ -202,6 +204,55 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
     if (z[1] == 0.0 && r->held) {
         for (i = 0; i < NZ; ++i) {
             p[NZ + i] = p[i * NZ + 1] = 0.0;
+        }
+    }
+}
+
+/* The hypothesis' likelihood is Gaussian: on the grid engine the rows'
+ * are exact, and comparing the two would score the noise model, not the
+ * train. So each row also runs as the Kalman engine's filter on the
+ * noise's moments (m->kx, m->kp, which the grid engine does not use), and
+ * the hypothesis is scored against the leading row l in that one currency:
+ * its increment is l's exact increment plus log(p_gauss(hypothesis) /
+ * p_gauss(l)). With the truth on row l the ratio is the Gaussian's Occam
+ * cost, off every row it is the evidence for being off. */
+void hstpf__refine_rows_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+{
+    uint16_t l;
+    if (m != NULL) {
+        hstpf__kalman_place(f, m, q);
+        return;
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf__kalman_place(f, &f->m[l], q);
+    }
+}
+
+void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
+{
+    double ll_lead = 0.0;
+    uint16_t l, lead = 0;
+    for (l = 1; l < f->cfg.n_models; ++l) {
+        lead = f->m[l].logq > f->m[lead].logq ? l : lead;
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        uint8_t held;
+        int floored;
+        const double ll = hstpf__kalman_step(f, &f->m[l], st, &held, &floored);
+        ll_lead = l == lead ? ll : ll_lead;
+    }
+    if (st->has_y) {
+        f->rf.loglik += (double)f->m[lead].loglik - ll_lead;
+    }
+}
+
+void hstpf__refine_shift(hstpf_t *f, double d)
+{
+    uint16_t l;
+    f->rf.kz[0] -= d;
+    if (hstpf__refine_yardstick(f)) {
+        for (l = 0; l < f->cfg.n_models; ++l) {
+            f->m[l].kx[0] -= d;
         }
     }
 }

@@ -160,16 +160,29 @@ static void test_band_point_theta(void **state)
 
 /* ---- configuration edges -------------------------------------------------- */
 
-/* refine = 1 is used by the Kalman engine only: under the others the
- * continuous hypothesis stays off (q_offtable 0, gain 1, no FIT_NONE). */
-static void test_refine_ignored_off_kalman(void **state)
+/* refine = 1 is ignored by the particle engine, and by the grid engine
+ * under non-Gaussian process noise (the yardstick would score the noise,
+ * docs/model.md): the continuous hypothesis stays off (q_offtable 0, gain
+ * 1, no FIT_NONE). The grid engine with Gaussian process noise weighs it
+ * (a Gamma position noise here). */
+static void test_refine_engines(void **state)
 {
     int i;
     (void)state;
-    for (i = 1; i < 3; ++i) { /* the particle and grid engines */
+    for (i = 0; i < 3; ++i) { /* particles; grid, Gamma w_v; grid, Gamma e only */
         hstpf_config_t c;
         hstpf_estimate_t e;
-        base_config(&c, engines[i], 2);
+        base_config(&c, i == 0 ? HSTPF_ENGINE_PARTICLE : HSTPF_ENGINE_GRID, 2);
+        if (i == 1) {
+            c.noise_v.kind = HSTPF_DIST_GAMMA;
+            c.noise_v.shape = 0.1;
+            c.noise_v.scale = 0.05;
+        } else if (i == 2) {
+            c.noise_e.kind = HSTPF_DIST_GAMMA;
+            c.noise_e.shape = 2.0;
+            c.noise_e.scale = 0.5;
+            c.noise_e.loc = -1.0;
+        }
         c.refine = 1;
         c.refine_prior_q = 0.4;
         tu_workspace(&c, 0);
@@ -177,11 +190,16 @@ static void test_refine_ignored_off_kalman(void **state)
         (void)run_fixes(0.0, 30);
         e = est();
         assert_true(e.valid);
-        assert_true(e.q_offtable == 0);
         assert_true(e.gain == 1);
-        assert_true(e.fit != HSTPF_FIT_NONE);
-        /* the rows alone carry the weight */
-        assert_float_equal((double)e.model[0].q + (double)e.model[1].q, 1.0, 1e-5);
+        if (i < 2) {
+            assert_true(e.q_offtable == 0);
+            assert_true(e.fit != HSTPF_FIT_NONE);
+            /* the rows alone carry the weight */
+            assert_float_equal((double)e.model[0].q + (double)e.model[1].q, 1.0, 1e-5);
+        } else {
+            assert_true(e.q_offtable > 0.0f && e.q_offtable < 1.0f);
+            assert_float_equal((double)e.model[0].q + (double)e.model[1].q + (double)e.q_offtable, 1.0, 1e-5);
+        }
     }
 }
 
@@ -628,7 +646,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_band_point_theta),
-        cmocka_unit_test(test_refine_ignored_off_kalman),
+        cmocka_unit_test(test_refine_engines),
         cmocka_unit_test(test_declare_hold_zero),
         cmocka_unit_test(test_q_floor_top),
         cmocka_unit_test(test_roughening_off),

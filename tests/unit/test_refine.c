@@ -41,22 +41,28 @@ static void test_band_by_hand(void **state)
 /* A 41-minute line, 17 rows in the bank; returns the last estimate and
  * checks on every step that "no type fits" and a declaration exclude each
  * other. */
-static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
-                     uint64_t seed, hstpf_estimate_t *e, int *ever_nofit)
+static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
+                           uint64_t seed, int heavy, hstpf_estimate_t *e, int *ever_nofit)
 {
+    static hstpf_sim_table_t etab;
     hstpf_config_t c;
     hstpf_sim_config_t sc;
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
     int k;
+    hstpf_sim_default(&sc);
     assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    if (heavy) { /* Student-t position noise: engine auto runs the grid */
+        hstpf_sim_heavy(&sc, HSTPF_SIM_HEAVY_T, &etab);
+        c.noise_e = sc.noise_e;
+    }
     c.refine = 1;
     c.models = hstpf_train_types;
     c.n_models = HSTPF_N_TRAIN_TYPES;
     c.seed = seed;
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    hstpf_sim_default(&sc);
+    assert_int_equal(filt.engine, heavy ? HSTPF_ENGINE_GRID : HSTPF_ENGINE_KALMAN); /* private: only to check auto */
     sc.truth = *truth;
     sc.seed = 100 + seed;
     sc.profile = HSTPF_PROFILE_JOURNEY;
@@ -79,6 +85,12 @@ static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track,
         }
         assert_true(e->q_offtable >= 0.0f && e->q_offtable <= 1.0f);
     }
+}
+
+static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
+                     uint64_t seed, hstpf_estimate_t *e, int *ever_nofit)
+{
+    run_line_noise(truth, track, n_track, seed, 0, e, ever_nofit);
 }
 
 /* On the table: never "no type fits", and the published W(v) band covers
@@ -153,6 +165,29 @@ static void test_gradient_no_fit(void **state)
     assert_true(w > 5.0); /* every row's c0 is below 3 N/kN */
 }
 
+/* The same two on the grid engine with Student-t position noise, where the
+ * hypothesis is scored through the rows' Kalman yardstick: on the table
+ * no "no type fits"; on an unmodelled 20 per-mille climb it is raised and
+ * no type is declared. */
+static void test_grid_yardstick(void **state)
+{
+    static const hstpf_track_seg_t climb[] = {{0.0, 20.0, 0.0}};
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit;
+    double w, sd;
+    (void)state;
+    run_line_noise(&truth, NULL, 0, 3, 1, &e, &nofit);
+    assert_int_equal(nofit, 0);
+    assert_true(e.q_offtable < 0.05f);
+    run_line_noise(&truth, climb, 1, 4, 1, &e, &nofit);
+    assert_int_equal(e.fit, HSTPF_FIT_NONE);
+    assert_int_equal(e.declared, -1);
+    assert_true(e.q_offtable > 0.99f);
+    assert_int_equal(hstpf_resistance_band(&e, 0.0, &w, &sd), HSTPF_OK);
+    assert_true(w > 5.0);
+}
+
 /* Switched off: no continuous hypothesis, gain 1, weights of the rows
  * sum to 1. */
 static void test_off(void **state)
@@ -188,7 +223,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_band_by_hand),
         cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
-        cmocka_unit_test(test_gradient_no_fit),
+        cmocka_unit_test(test_gradient_no_fit), cmocka_unit_test(test_grid_yardstick),
         cmocka_unit_test(test_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

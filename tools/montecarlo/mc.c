@@ -620,6 +620,11 @@ static const scenario_t scenarios[] = {
     {"mass20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0},
     {"absent", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1},
     {"gain-5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, -0.05, 0.0, 0.0, 0, 0},
+    /* the same on the line with heavy-t's Student-t position noise (the grid
+     * engine, the continuous hypothesis through its yardstick) */
+    {"stops-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"off15-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
+    {"grade8-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
 };
 
 /* Journey table: one row per truth and a total (docs/results.md). */

@@ -494,6 +494,7 @@ typedef struct {
     double origin_m;                 /* particles are relative to this */
     double time_s;
     double xi;
+    double noise_mom[6];             /* mean, sd of w_s, w_v, e: a Gaussian's own, else its table's */
     double held_s;                   /* time the current leader held q > thr */
     double decision_time_s;
     uint32_t steps;
