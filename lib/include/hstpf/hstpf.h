@@ -257,8 +257,9 @@ typedef struct {
     double e_blur_sd;
     /** 1: besides the rows, the bank weighs one continuous hypothesis, a
      *  train near the table but on no row: an augmented EKF on (s, v, c0,
-     *  c1, c2, k) with Table 1 as prior (docs/model.md). Used with the
-     *  Kalman engine only (ignored otherwise). 0: rows only (1: a train
+     *  c1, c2, k) with Table 1 as prior (docs/model.md). Used by the
+     *  Kalman engine, and by the grid engine under Gaussian process noise
+     *  (through a Kalman yardstick of the rows); ignored otherwise. 0: rows only (1: a train
      *  off every row is then seldom declared a wrong type; it costs some
      *  identification speed on the table, docs/results.md). */
     uint8_t refine;
