@@ -84,6 +84,13 @@ for s in heavy-t heavy-mix; do
   # reference: the filter told only a Gaussian of the noise's sd (the Kalman engine)
   "$mc" --scenario "$s" --seeds "$gseeds" --gauss-e --json "$out/$s-gauss.json" | tee "$out/$s-gauss.txt"
 done
+echo "== trains not on Table 1 with Student-t fixes: the grid engine's continuous hypothesis"
+for s in stops-t off15-t grade8-t; do
+  "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
+done
+for s in off15-t grade8-t; do
+  "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+done
 echo "== declaration rule (17 types, both engines)"
 {
   echo "engine | threshold | hold [s] | result"

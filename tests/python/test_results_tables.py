@@ -89,3 +89,15 @@ def test_prior_rows(tmp_path):
     assert rows[1][1:] == ["208 / 291 / 706", "66.7%", "1.5%", "2.5%", "3.5%", "4.5%", "82.0%"]
     assert rows[0][1] == "222 / 291 / 706" and rows[0][-1] == "86.0%"
     assert rows[2][1] == "207 / 291 / 706" and rows[2][3] == "9.5%"
+
+
+def test_offtable_student_t_rows(tmp_path):
+    # the Student-t scenarios get their own table, only with their files present
+    off = ("trains off the table: W(v) error at the end median 3.11% p90 13.54%; the 95% band covers "
+           "the truth in 91.0% of runs; 'no type fits' at the end in {}%; a type declared in 0.5% (refine on)\n")
+    (tmp_path / "grade8-t.txt").write_text(off.format("61.8"))
+    (tmp_path / "grade8-t-norefine.txt").write_text(off.format("0.0"))
+    table = rt.offtable(tmp_path, rt.OFFTABLE_T).splitlines()
+    assert len(table) == 4  # header, rule, on and off (no stops-t, off15-t files)
+    assert table[2].startswith("| `grade8-t` | on (default) | 3.11% / 13.54% | 91.0% | 61.8% | 0.5% |")
+    assert table[3].startswith("| `grade8-t` | off |")
