@@ -10,7 +10,7 @@ const hstpfd__key_t hstpfd__keys[] = {
     {"models", K_MODELS, 0, 0, 0, 0,
      "model set: Table 1 names and/or name:c0:c1:c2, comma-separated; all = the 17 rows"},
     {"engine", K_ENGINE, 0, 0, 0, 0,
-     "per-model estimator: auto (Kalman if all three noises are Gaussian, else particles) | particle | kalman"},
+     "per-model estimator: auto (Kalman if all three noises are Gaussian, else grid) | particle | kalman | grid"},
     {"particles", K_U16, OFF(particles), 2, HSTPF_MAX_PARTICLES, 0, "particles per model"},
     {"seed", K_U64, OFF(seed), 0, 0, 0, "random seed of the filter"},
     {"gamma_rot", K_DBL, OFF(gamma_rot), 0, 1, 0, "rotating-mass factor gamma"},

@@ -156,6 +156,7 @@ int hstpfd_config_write(const hstpfd_config_t *c, char *buf, size_t size)
             PUT("%s = %s\n", k->name,
                 c->engine == HSTPF_ENGINE_AUTO       ? "auto"
                 : c->engine == HSTPF_ENGINE_PARTICLE ? "particle"
+                : c->engine == HSTPF_ENGINE_GRID     ? "grid"
                                                      : "kalman");
             break;
         case K_FORMAT:

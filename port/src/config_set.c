@@ -359,8 +359,10 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
             c->engine = HSTPF_ENGINE_PARTICLE;
         } else if (strcmp(v, "kalman") == 0) {
             c->engine = HSTPF_ENGINE_KALMAN;
+        } else if (strcmp(v, "grid") == 0) {
+            c->engine = HSTPF_ENGINE_GRID;
         } else {
-            hstpfd__fail(err, err_size, "engine: '%s' must be auto, particle or kalman", v);
+            hstpfd__fail(err, err_size, "engine: '%s' must be auto, particle, kalman or grid", v);
             return -1;
         }
         return 0;

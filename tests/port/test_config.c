@@ -351,8 +351,11 @@ static void test_write_sizes_and_errors(void **state)
     assert_int_equal(cfg.engine, HSTPF_ENGINE_PARTICLE);
     assert_int_equal(hstpfd_config_set(&cfg, "engine", "kalman", err, sizeof err), 0);
     assert_int_equal(cfg.engine, HSTPF_ENGINE_KALMAN);
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "grid", err, sizeof err), 0);
+    assert_int_equal(cfg.engine, HSTPF_ENGINE_GRID);
     assert_int_equal(hstpfd_config_set(&cfg, "engine", "auto", err, sizeof err), 0);
-    assert_int_equal(hstpfd_config_set(&cfg, "engine", "grid", err, sizeof err), -1);
+    assert_int_equal(cfg.engine, HSTPF_ENGINE_AUTO);
+    assert_int_equal(hstpfd_config_set(&cfg, "engine", "point-mass", err, sizeof err), -1);
     {
         static const char *const yes[] = {"1", "yes", "true", "on"}, *const no[] = {"0", "no", "false", "off"};
         for (k = 0; k < 4; ++k) {
