@@ -241,6 +241,9 @@ static int finite_models(const hstpf_t *f)
         const hstpf_model_t *m = &f->m[l];
         z += fabs((double)m->s_mean) + fabs((double)m->v_mean) + fabs((double)m->s_var) +
              fabs((double)m->v_var) + fabs(m->logq);
+        if (hstpf__refine_yardstick(f)) { /* the rows' yardstick filters too */
+            z += fabs(m->kx[0]) + fabs(m->kx[1]) + fabs(m->kp[0]) + fabs(m->kp[2]);
+        }
     }
     for (i = 0; i < HSTPF_REFINE_NZ; ++i) { /* zero while the hypothesis is off */
         z += fabs(f->rf.kz[i]) + fabs(f->rf.kp[i * (HSTPF_REFINE_NZ + 1)]);
