@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "grid.h"
+#include "refine.h"
 #include "track.h"
 
 
@@ -89,11 +90,21 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
+/* A model placed from fixes: its cells, and its row's Kalman yardstick
+ * when the continuous hypothesis is scored with it (refine.c). */
+static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
+{
+    hstpf__grid_place_one(f, m, q);
+    if (hstpf__refine_yardstick(f)) {
+        hstpf__kalman_place(f, m, q);
+    }
+}
+
 static void place_all(hstpf_t *f, const hstpf__acq_t *q)
 {
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
-        hstpf__grid_place_one(f, &f->m[l], q);
+        place_one(f, &f->m[l], q);
     }
 }
 
@@ -215,6 +226,7 @@ static void shift(hstpf_t *f, real d)
     for (l = 0; l < f->cfg.n_models; ++l) {
         f->grid.geom[l][0] -= d;
         f->m[l].s_mean -= d;
+        f->m[l].kx[0] -= (double)d; /* the yardstick's, if it runs */
     }
 }
 
@@ -238,5 +250,5 @@ static void attach(hstpf_t *f, void *ws)
     f->grid.rest = (real(*)[NS])(void *)r;
 }
 
-const hstpf__engine_t hstpf__engine_grid = {place_all, hstpf__grid_place_one, predict_update, NULL, shift, ws_bytes,
+const hstpf__engine_t hstpf__engine_grid = {place_all, place_one, predict_update, NULL, shift, ws_bytes,
                                              attach};

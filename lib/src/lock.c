@@ -38,9 +38,6 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     q.y1 = f->pend_y - f->origin_m;
     q.y2 = y - f->origin_m;
     hstpf__engine_of(f)->place_all(f, &q);
-    if (hstpf__refine_yardstick(f)) {
-        hstpf__refine_rows_place(f, NULL, &q);
-    }
     if (f->rf.active) {
         /* (s, v) as the rows' filters have them; theta from the prior the
          * first time, kept from what was learnt afterwards */
@@ -84,7 +81,7 @@ void hstpf__rebase(hstpf_t *f)
     }
     d = (real)floor(rel);
     hstpf__engine_of(f)->shift(f, d);
-    hstpf__refine_shift(f, (double)d);
+    f->rf.kz[0] -= (double)d;
     f->origin_m += (double)d;
     hstpf__track_rebase(f);
 }
@@ -112,9 +109,6 @@ void hstpf__models_reacquire(hstpf_t *f, real yr)
             q.xu = 0.0;
             q.v0 = vb;
             e->place_one(f, m, &q);
-            if (hstpf__refine_yardstick(f)) {
-                hstpf__refine_rows_place(f, m, &q);
-            }
             m->floor_run = 0;
             ++m->reacquired;
         }

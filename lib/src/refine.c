@@ -211,23 +211,12 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
 /* The hypothesis' likelihood is Gaussian: on the grid engine the rows'
  * are exact, and comparing the two would score the noise model, not the
  * train. So each row also runs as the Kalman engine's filter on the
- * noise's moments (m->kx, m->kp, which the grid engine does not use), and
+ * noise's moments (m->kx, m->kp, which the grid engine does not use; it
+ * places and shifts them with its cells), and
  * the hypothesis is scored against the leading row l in that one currency:
  * its increment is l's exact increment plus log(p_gauss(hypothesis) /
  * p_gauss(l)). With the truth on row l the ratio is the Gaussian's Occam
  * cost, off every row it is the evidence for being off. */
-void hstpf__refine_rows_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
-{
-    uint16_t l;
-    if (m != NULL) {
-        hstpf__kalman_place(f, m, q);
-        return;
-    }
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        hstpf__kalman_place(f, &f->m[l], q);
-    }
-}
-
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
 {
     double ll_lead = 0.0;
@@ -243,17 +232,6 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
     }
     if (st->has_y) {
         f->rf.loglik += (double)f->m[lead].loglik - ll_lead;
-    }
-}
-
-void hstpf__refine_shift(hstpf_t *f, double d)
-{
-    uint16_t l;
-    f->rf.kz[0] -= d;
-    if (hstpf__refine_yardstick(f)) {
-        for (l = 0; l < f->cfg.n_models; ++l) {
-            f->m[l].kx[0] -= d;
-        }
     }
 }
 

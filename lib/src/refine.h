@@ -22,16 +22,10 @@ static inline int hstpf__refine_yardstick(const hstpf_t *f)
     return f->rf.active && f->engine != (uint8_t)HSTPF_ENGINE_KALMAN;
 }
 
-/* The yardstick of every row (m == NULL) or of row m placed from q. */
-void hstpf__refine_rows_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
-
 /* The yardstick's step, after the engine's and hstpf__refine_update: the
  * hypothesis' increment becomes the leading row's own plus the log ratio
  * of the hypothesis to that row in the yardstick. */
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st);
-
-/* Positions move by -d. */
-void hstpf__refine_shift(hstpf_t *f, double d);
 
 /* The posterior mean of (c0, c1, c2), each >= 0, and its covariance. */
 void hstpf__refine_theta(const hstpf_t *f, double *th, double *cov);
