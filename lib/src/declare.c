@@ -78,13 +78,7 @@ static void update_fit(hstpf_t *f, double dt, int evidence)
  * steps that carry evidence: not at standstill, not without a fix. */
 void hstpf__update_declaration(hstpf_t *f, double dt, int evidence)
 {
-    int16_t best = 0;
-    uint16_t l;
-    for (l = 1; l < f->cfg.n_models; ++l) {
-        if (f->m[l].logq > f->m[best].logq) {
-            best = (int16_t)l;
-        }
-    }
+    const int16_t best = (int16_t)hstpf__leading_row(f);
     if (f->declared >= 0 && exp(f->m[f->declared].logq) < f->cfg.withdraw_threshold) {
         f->declared = -1;
         f->status = HSTPF_STATUS_WITHDRAWN;

@@ -20,6 +20,16 @@
  * first failing field. */
 int32_t hstpf__config_check(const hstpf_config_t *c, const char **field);
 
+/* The row with the largest weight (the first of equals). */
+static inline uint16_t hstpf__leading_row(const hstpf_t *f)
+{
+    uint16_t l, best = 0;
+    for (l = 1; l < f->cfg.n_models; ++l) {
+        best = f->m[l].logq > f->m[best].logq ? l : best;
+    }
+    return best;
+}
+
 /* 1 when noise_s, noise_v and noise_e are all Gaussian. */
 int hstpf__all_gaussian(const hstpf_config_t *c);
 

@@ -219,11 +219,9 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
  * cost, off every row it is the evidence for being off. */
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
 {
+    const uint16_t lead = hstpf__leading_row(f);
     double ll_lead = 0.0;
-    uint16_t l, lead = 0;
-    for (l = 1; l < f->cfg.n_models; ++l) {
-        lead = f->m[l].logq > f->m[lead].logq ? l : lead;
-    }
+    uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
         uint8_t held;
         int floored;
