@@ -5,8 +5,10 @@
  *   log-likelihood increments must agree with the Kalman engine's over a
  *   whole Case 1 run (1800 s, the paper's three models), steps where
  *   either engine is at its likelihood floor left out (each has its own
- *   convention there): the true model's within 0.15 nats at every step
- *   and 0.015 on average (measured at 48 x 48: 0.11 and 0.009); every
+ *   convention there): the true model's within 0.25 nats at every step
+ *   and 0.015 on average (measured at 20 x 72: 0.20 and 0.012; at 48 x 48
+ *   0.12 and 0.008: twenty position cells span the posterior's +-4.3 sd,
+ *   and one step in 1781 differs by 0.2); every
  *   model's within 3 nats and 0.08 on average (measured 2.1 and 0.05: a
  *   model the measurements pull away from its prediction has its
  *   posterior in the predicted tails, which the box cuts at 1e-5 on the
@@ -18,8 +20,8 @@
  *   REF_RUNS independent runs give its Monte Carlo standard error se. The
  *   grid's sums must lie within 4 se + 0.04 nats per step of the reference
  *   mean. The 0.04 is the grid's own bias, not Monte Carlo error: at
- *   48 x 48 the true model's sum is 0.025 nats per step below the
- *   reference (7.5 of 219 nats over 300 s; cells of a few millimetres
+ *   20 x 72 the true model's sum is 0.022 nats per step below the
+ *   reference (6.6 of 219 nats over 300 s; cells of a few millimetres
  *   under the unbounded Gamma(0.5) measurement density), CRH5's 0.013.
  * - Bit-for-bit determinism: two instances with different seeds give
  *   identical estimates at every step (the grid has no RNG), and a reset
@@ -158,7 +160,7 @@ static void test_gaussian_vs_kalman(void **state)
                   n, max_true, sum_true / n, max_all, sum_all / n, floored);
     assert_true(floored < 100);
     assert_true(n > 1700);
-    assert_true(max_true <= 0.15);
+    assert_true(max_true <= 0.25);
     assert_true(sum_true / n <= 0.015);
     assert_true(max_all <= 3.0);
     assert_true(sum_all / n <= 0.08);
@@ -212,7 +214,7 @@ static void test_track_vs_kalman(void **state)
         ++n;
     }
     print_message("hilly track, true model |d loglik|: max %.4f mean %.4f over %d steps\n", mx, sum / n, n);
-    assert_true(mx <= 0.15);
+    assert_true(mx <= 0.25);
     assert_true(sum / n <= 0.015);
 }
 

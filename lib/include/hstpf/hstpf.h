@@ -378,13 +378,16 @@ typedef struct {
 
 /*
  * Grid engine capacity: cells per model in position x speed. Override with
- * -D when building the library and its users (they size hstpf_t).
+ * -D when building the library and its users (they size hstpf_t). More
+ * speed than position cells: the types differ in W(v), so the speed axis
+ * decides (docs/grid.md, "Cells": Case 2 decides at 145 s on 20 x 72,
+ * 153 s on 48 x 48, which has 60 % more cells).
  */
 #ifndef HSTPF_GRID_NS
-#define HSTPF_GRID_NS 48 /**< grid cells in position */
+#define HSTPF_GRID_NS 20 /**< grid cells in position */
 #endif
 #ifndef HSTPF_GRID_NV
-#define HSTPF_GRID_NV 48 /**< grid cells in speed */
+#define HSTPF_GRID_NV 72 /**< grid cells in speed */
 #endif
 #if HSTPF_GRID_NS < 8 || HSTPF_GRID_NV < 8 || HSTPF_GRID_NS > 1024 || HSTPF_GRID_NV > 1024
 #error "HSTPF_GRID_NS and HSTPF_GRID_NV must be in [8, 1024]"
