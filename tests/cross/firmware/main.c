@@ -241,6 +241,10 @@ int main(void)
             p = put_u(p, ticks);
             emit(line, put_s(p, " SysTick counts"));
         }
+        p = put_s(line, "m4f: grid cells ");
+        p = put_u(p, HSTPF_GRID_NS);
+        p = put_s(p, " x ");
+        emit(line, put_u(p, HSTPF_GRID_NV));
     }
 
     p = put_s(line, "m4f: steps ");
