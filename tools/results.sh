@@ -84,6 +84,19 @@ for s in heavy-t heavy-mix; do
   # reference: the filter told only a Gaussian of the noise's sd (the Kalman engine)
   "$mc" --scenario "$s" --seeds "$gseeds" --gauss-e --json "$out/$s-gauss.json" | tee "$out/$s-gauss.txt"
 done
+echo "== the grid's cells (position x speed): paper Case 2 on seeds 1-100 and 1001-1100"
+# Each shape is a compile-time capacity: the library built again at it.
+for shape in "48 48" "24 96" "20 72"; do
+  set -- $shape
+  b=build-grid-$1x$2
+  cmake -S . -B "$b" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_C_FLAGS="-DHSTPF_GRID_NS=$1 -DHSTPF_GRID_NV=$2" >/dev/null
+  cmake --build "$b" -j "$(nproc)" --target hstpf-mc >/dev/null
+  for first in 1 1001; do
+    echo "$1 x $2 | seeds $first.. | $("$b/tools/montecarlo/hstpf-mc" --scenario paper2 --seeds "$seeds" \
+      --first-seed "$first" | tail -1)"
+  done
+done | tee "$out/grid_cells.txt"
 echo "== trains not on Table 1 with Student-t fixes: the grid engine's continuous hypothesis"
 for s in stops-t off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
