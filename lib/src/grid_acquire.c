@@ -27,8 +27,8 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     if (t > (real)0) {
         const real sc = (real)sqrt(q->t12 / c->dt_nominal_s);
         const real vm = (real)((q->y2 - q->y1) / q->t12), vp = vm > (real)0 ? vm : (real)0;
-        mus = sc * (real)c->noise_s.mean;
-        cs = t * ((real)q->xu - m->k0 - (m->k1 + m->k2 * vp) * vp) + sc * (real)c->noise_v.mean;
+        mus = sc * (real)f->noise_mom[0]; /* the noise's own mean (a Gamma spec's mean field is unused) */
+        cs = t * ((real)q->xu - m->k0 - (m->k1 + m->k2 * vp) * vp) + sc * (real)f->noise_mom[2];
         v_lo = (s_lo - y1 + el - mus) / t + cs;
         v_hi = (s_hi - y1 + eh - mus) / t + cs;
     } else {

@@ -20,8 +20,8 @@
  *   REF_RUNS independent runs give its Monte Carlo standard error se. The
  *   grid's sums must lie within 4 se + 0.04 nats per step of the reference
  *   mean. The 0.04 is the grid's own bias, not Monte Carlo error: at
- *   20 x 72 the true model's sum is 0.022 nats per step below the
- *   reference (6.6 of 219 nats over 300 s; cells of a few millimetres
+ *   20 x 72 the true model's sum is 0.019 nats per step below the
+ *   reference (5.7 of 219 nats over 300 s; cells of a few millimetres
  *   under the unbounded Gamma(0.5) measurement density), CRH5's 0.013.
  * - Bit-for-bit determinism: two instances with different seeds give
  *   identical estimates at every step (the grid has no RNG), and a reset
