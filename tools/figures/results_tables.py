@@ -142,7 +142,7 @@ ISSUE13 = {
     "heavy-t": "all 17 types, Student-t(3) position noise, paper profile",
     "heavy-mix": "all 17 types, 95/5 % multipath mixture position noise, paper profile",
 }
-ENGINES = [("grid", "grid 48 x 48 (library defaults)"),
+ENGINES = [("grid", "grid 20 x 72 (library defaults)"),
            ("particle", "particles, M = 100 (the library's), blur 0.2 m, roughening 0.7"),
            ("particle256", "particles, M = 256, blur 0.2 m, roughening 0.7"),
            ("gauss", "reference: Kalman, told only N(0, sd^2) of the noise (`--gauss-e`)")]

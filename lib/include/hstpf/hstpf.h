@@ -380,8 +380,8 @@ typedef struct {
  * Grid engine capacity: cells per model in position x speed. Override with
  * -D when building the library and its users (they size hstpf_t). More
  * speed than position cells: the types differ in W(v), so the speed axis
- * decides (docs/grid.md, "Cells": Case 2 decides at 145 s on 20 x 72,
- * 153 s on 48 x 48, which has 60 % more cells).
+ * decides (docs/grid.md, "Cells": Case 2's median decision, 400 seeds,
+ * 147 s on 20 x 72 against 152 s on 48 x 48, which has 60 % more cells).
  */
 #ifndef HSTPF_GRID_NS
 #define HSTPF_GRID_NS 20 /**< grid cells in position */
