@@ -85,9 +85,10 @@ static void place_cloud(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         if (q->t12 > 0.0) {
             const double sc = sqrt(q->t12 / c->dt_nominal_s);
             const real t = (real)q->t12;
-            const real v1 = ((real)(q->y2 - q->y1 - sc * c->noise_s.mean) - f->nz_s[i] + f->nz_v[i]) / t;
+            /* the noises' own means: a Gamma spec leaves its mean field 0 */
+            const real v1 = ((real)(q->y2 - q->y1 - sc * f->noise_mom[0]) - f->nz_s[i] + f->nz_v[i]) / t;
             v = v1 + t * accel(f, m, (real)q->xu, m->s[i], v1 > (real)0 ? v1 : (real)0) +
-                (real)(sc * c->noise_v.mean);
+                (real)(sc * f->noise_mom[2]);
         } else {
             v = (real)q->v0 + (real)c->init_speed_sd * f->nz_v[i];
         }
