@@ -2,7 +2,8 @@
  * refusals not met elsewhere (each with its documented code, and the library
  * running on good data afterwards), the edges of the configuration ranges
  * (q_floor at its top, declare_hold_s 0, roughening off, refine with an
- * engine that ignores it), the acquisition's pending fix expiring, estimates
+ * engine that ignores it), the acquisition's pending fix expiring, and its
+ * placement under a process noise with a non-zero mean, estimates
  * beyond the header's ranges marked invalid, and a lost model redrawn by
  * each engine. The truth is a train at constant speed under one Table 1
  * row (traction = its W(v) on a flat track), so every expected value is
@@ -72,6 +73,36 @@ static double run_fixes(double t0, int n)
         }
     }
     return t0 + n;
+}
+
+/* ---- acquisition with a non-zero-mean process noise ---------------------- */
+
+/* Two fixes place the speed by the model's Euler step with the process
+ * noises' means, v2 = (y2 - y1 - mu_s) / T + T a + mu_v (docs/grid.md,
+ * "Acquisition and standstill"). A Gamma speed noise of mean 1 m/s (shape
+ * 4, scale 0.25) and exact fixes V_TRUE apart under the row held at V_TRUE
+ * (a = 0): both sampling engines must place it at V_TRUE + 1. (A Gamma
+ * spec's mean field is 0; reading it placed the speed at V_TRUE.) */
+static void test_acquire_noise_mean(void **state)
+{
+    int k;
+    (void)state;
+    for (k = 1; k < 3; ++k) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[k], 1);
+        memset(&c.noise_v, 0, sizeof c.noise_v);
+        c.noise_v.kind = HSTPF_DIST_GAMMA;
+        c.noise_v.shape = 4.0;
+        c.noise_v.scale = 0.25;
+        c.noise_e.sd = 0.05;
+        tu_workspace(&c, 0);
+        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        assert_int_equal(step(1.0, u_hold(), Y0, 1), HSTPF_OK);
+        assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE, 1), HSTPF_OK);
+        e = est();
+        TU_CLOSE(e.model[0].speed_mps, V_TRUE + 1.0, 0.25);
+    }
 }
 
 /* ---- refusals ------------------------------------------------------------ */
@@ -645,6 +676,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_acquire_noise_mean),
         cmocka_unit_test(test_band_point_theta),
         cmocka_unit_test(test_refine_engines),
         cmocka_unit_test(test_declare_hold_zero),
