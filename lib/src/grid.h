@@ -44,6 +44,18 @@ static inline real hstpf__grid_sum(const real *x, int n)
     return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
 }
 
+/* o += c r over a whole row. Columns outside the occupied ones hold exact
+ * zeros in r, so the sums are those over the occupied columns; a length
+ * known at compile time and rows that cannot overlap let the loop be
+ * unrolled and vectorised without a variable range's run-time checks. */
+static inline void hstpf__grid_axpy_row(real *restrict o, const real *restrict r, real c)
+{
+    int i;
+    for (i = 0; i < NS; ++i) {
+        o[i] += c * r[i];
+    }
+}
+
 /* ---- grid_cdf.c: a built distribution over intervals ------------------ */
 
 /* P(X <= x) into *lo and P(X > x) into *hi, each on its own side. */

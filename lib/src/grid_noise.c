@@ -51,27 +51,28 @@ int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, rea
     return n;
 }
 
-/* Position noise on one row, in place over [c0, c1] -> [o0, o1]: o[i] =
- * sum_k ks[k] x[i - m0s - k] over every tap, with x the input padded with
- * zeros (pad: scratch of (c1 - c0 + 1) + 2 (nks - 1) values). The padding's
- * terms add exact zeros, so the sum is that of the taps that reach, in the
- * same order, and the loop over i vectorises. */
-static void conv_row(real *o, real *pad, int c0, int c1, const real *ks, int nks, int m0s)
+/* Position noise on one row, in place: o[i] = sum_k ks[k] x[i - m0s - k]
+ * with x the row padded with zeros (pad: scratch of NS + nks - 1 values,
+ * pad[t + m0s + nks - 1] = x[t]). The padding's terms add exact zeros, so
+ * each sum is that of the taps that reach, in the same order, and the loop
+ * over a whole row vectorises. */
+static void conv_row(real *restrict o, real *restrict pad, const real *ks, int nks, int m0s)
 {
-    const int o0 = c0 + m0s < 0 ? 0 : c0 + m0s, o1 = c1 + m0s + nks - 1 > NS - 1 ? NS - 1 : c1 + m0s + nks - 1;
-    real *x = pad + (nks - 1) - c0; /* x[t] for t in [c0 - nks + 1, c1 + nks - 1] */
+    const int off = m0s + nks - 1;
     int i, k;
-    for (i = 0; i < (c1 - c0 + 1) + 2 * (nks - 1); ++i) {
+    for (i = 0; i < NS + nks - 1; ++i) {
         pad[i] = 0;
     }
-    for (i = c0; i <= c1; ++i) {
-        x[i] = o[i];
+    for (i = 0; i < NS; ++i) {
+        if (i + off >= 0 && i + off < NS + nks - 1) {
+            pad[i + off] = o[i];
+        }
         o[i] = 0;
     }
     for (k = 0; k < nks; ++k) {
         const real c = ks[k];
-        const real *src = x - m0s - k;
-        for (i = o0; i <= o1; ++i) {
+        const real *src = pad + (nks - 1) - k;
+        for (i = 0; i < NS; ++i) {
             o[i] += c * src[i];
         }
     }
@@ -98,19 +99,20 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
         c0 = box[2];
         c1 = box[3];
         for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
-            real *o = p + j * NS;
-            for (k = 0; k < nkv; ++k) {
-                const int src = j - m0v - k;
+            /* the taps whose source row lies in the box */
+            const int k0 = j - m0v - box[1] > 0 ? j - m0v - box[1] : 0;
+            const int k1 = j - m0v - box[0] < nkv - 1 ? j - m0v - box[0] : nkv - 1;
+            real acc[NS]; /* the row in registers across the taps */
+            for (i = 0; i < NS; ++i) {
+                acc[i] = 0;
+            }
+            for (k = k0; k <= k1; ++k) {
                 const real c = kv[k];
-                const real *r;
-                if (src < box[0] || src > box[1] || c <= (real)0) {
-                    continue;
-                }
-                r = w + src * NS;
-                for (i = c0; i <= c1; ++i) {
-                    o[i] += c * r[i];
+                if (c > (real)0) {
+                    hstpf__grid_axpy_row(acc, w + (j - m0v - k) * NS, c);
                 }
             }
+            memcpy(p + j * NS, acc, sizeof acc);
         }
         if (ng[2] <= (real)0) { /* the box starts at 0: what falls below is at rest */
             for (j = box[0]; j <= box[1]; ++j) {
@@ -129,9 +131,9 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
     }
     if (!(nks == 1 && m0s == 0)) { /* work is free now: the padded rows */
         for (j = r0; j <= r1; ++j) {
-            conv_row(p + j * NS, w, c0, c1, ks, nks, m0s);
+            conv_row(p + j * NS, w, ks, nks, m0s);
         }
-        conv_row(rpend, w, 0, NS - 1, ks, nks, m0s);
+        conv_row(rpend, w, ks, nks, m0s);
     }
     for (i = 0; i < NS; ++i) {
         rest[i] = f->grid.rnew[i] + rpend[i];

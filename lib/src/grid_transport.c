@@ -93,9 +93,7 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
         c1 = (int)(a + (real)(last[j] + 1) * g[1] / ng[1]);
         c0 = c0 < 0 ? 0 : (c0 > NS - 1 ? NS - 1 : c0);
         c1 = c1 < 0 ? 0 : (c1 > NS - 1 ? NS - 1 : c1);
-        for (i = c0; i <= c1; ++i) {
-            row[i] = 0;
-        }
+        memset(row, 0, sizeof f->grid.row);
         hstpf__grid_remap(p + j * NS, first[j], last[j], a, g[1] / ng[1], row, NS);
         if (f0 > (real)0) { /* s' = s + T v, v' = 0: to rest, position noise to come */
             for (i = c0; i <= c1; ++i) {
@@ -117,11 +115,8 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
         for (k = ta > (real)0 ? (int32_t)ta : 0; k < NV && (k == (int32_t)ta || (real)k < tb); ++k) {
             const real lo = ta > (real)k ? ta : (real)k, hi = tb < (real)(k + 1) ? tb : (real)(k + 1);
             const real frac = (tb > ta ? (hi - lo) / (tb - ta) : (real)1) * ((real)1 - f0);
-            real *o = w + k * NS;
             if (frac > (real)0) {
-                for (i = c0; i <= c1; ++i) {
-                    o[i] += frac * row[i];
-                }
+                hstpf__grid_axpy_row(w + k * NS, row, frac);
                 box[0] = (int16_t)(k < box[0] ? k : box[0]);
                 box[1] = (int16_t)(k > box[1] ? k : box[1]);
             }
