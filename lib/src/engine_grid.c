@@ -53,6 +53,20 @@ real hstpf__grid_marginals(hstpf_t *f, const real *p, const real *rest)
     return tot;
 }
 
+/* qa[i & 7] += x[i]^2 for i < n, in blocks of eight (vector adds). */
+static void sumsq_into(real *qa, const real *x, int n)
+{
+    int i, r;
+    for (i = 0; i + 8 <= n; i += 8) {
+        for (r = 0; r < 8; ++r) {
+            qa[r] += x[i + r] * x[i + r];
+        }
+    }
+    for (r = 0; i + r < n; ++r) {
+        qa[r] += x[i + r] * x[i + r];
+    }
+}
+
 /* Mean, variance (with the cells' own width) and effective cell count. */
 void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
 {
@@ -74,12 +88,8 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     { /* sum of squares in float, eight partial sums: a double per cell is
        * soft-float on the M4F (a quarter of its grid step) */
         real qa[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-        for (i = 0; i < NS * NV; ++i) {
-            qa[i & 7] += p[i] * p[i];
-        }
-        for (i = 0; i < NS; ++i) {
-            qa[i & 7] += rest[i] * rest[i];
-        }
+        sumsq_into(qa, p, NS * NV);
+        sumsq_into(qa, rest, NS);
         q2 = (double)(((qa[0] + qa[1]) + (qa[2] + qa[3])) + ((qa[4] + qa[5]) + (qa[6] + qa[7])));
     }
     m->s_mean = (real)s1;

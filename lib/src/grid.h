@@ -37,9 +37,14 @@ static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt
 static inline real hstpf__grid_sum(const real *x, int n)
 {
     real a[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-    int i;
-    for (i = 0; i < n; ++i) {
-        a[i & 7] += x[i];
+    int i, r;
+    for (i = 0; i + 8 <= n; i += 8) { /* a[r] += x[i + r]: two vector adds */
+        for (r = 0; r < 8; ++r) {
+            a[r] += x[i + r];
+        }
+    }
+    for (r = 0; i + r < n; ++r) {
+        a[r] += x[i + r];
     }
     return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
 }
