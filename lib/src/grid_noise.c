@@ -53,29 +53,25 @@ int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, rea
 
 /* Position noise on one row, in place: o[i] = sum_k ks[k] x[i - m0s - k]
  * with x the row padded with zeros (pad: scratch of NS + nks - 1 values,
- * pad[t + m0s + nks - 1] = x[t]). The padding's terms add exact zeros, so
+ * pad[t + m0s + nks - 1] = x[t], zeroed by the caller: every row writes the
+ * same cells of it). The padding's terms add exact zeros, so
  * each sum is that of the taps that reach, in the same order, and the loop
  * over a whole row vectorises. */
 static void conv_row(real *restrict o, real *restrict pad, const real *ks, int nks, int m0s)
 {
     const int off = m0s + nks - 1;
+    real acc[NS]; /* the row in registers across the taps */
     int i, k;
-    for (i = 0; i < NS + nks - 1; ++i) {
-        pad[i] = 0;
-    }
-    for (i = 0; i < NS; ++i) {
+    for (i = 0; i < NS; ++i) { /* pad is zero outside these cells */
         if (i + off >= 0 && i + off < NS + nks - 1) {
             pad[i + off] = o[i];
         }
-        o[i] = 0;
+        acc[i] = 0;
     }
     for (k = 0; k < nks; ++k) {
-        const real c = ks[k];
-        const real *src = pad + (nks - 1) - k;
-        for (i = 0; i < NS; ++i) {
-            o[i] += c * src[i];
-        }
+        hstpf__grid_axpy_row(acc, pad + (nks - 1) - k, ks[k]);
     }
+    memcpy(o, acc, sizeof acc);
 }
 
 /* Step 3: speed noise from work into p (what it would take below 0 goes to
@@ -130,6 +126,7 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
         }
     }
     if (!(nks == 1 && m0s == 0)) { /* work is free now: the padded rows */
+        memset(w, 0, sizeof(real) * (size_t)(NS + nks - 1));
         for (j = r0; j <= r1; ++j) {
             conv_row(p + j * NS, w, ks, nks, m0s);
         }
