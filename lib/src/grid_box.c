@@ -16,23 +16,37 @@ static real bin_width(real x0, real x1, real h0, real r, int nmax)
     return hk > h ? hk : h;
 }
 
-/* The cut_lo and 1 - cut_hi quantiles of a histogram (bins of width h from x0, n bins)
- * convolved with the noise scale * X: the support of a predicted marginal. */
-static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
-                           real cut_hi, real *k, int *m0_out, real *lo, real *hi)
+/* Output bin b (0 .. n + nk - 2) of hist convolved with the kernel k:
+ * sum_kk k[kk] hist[b - kk]. */
+static real conv_bin(const real *hist, int n, const real *k, int nk, int b)
 {
-    int m0, nk, b, kk;
+    real o = 0;
+    int kk;
+    for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
+        o += k[kk] * hist[b - kk];
+    }
+    return o;
+}
+
+/* The cut_lo and 1 - cut_hi quantiles of a histogram (bins of width h from
+ * x0, n bins) convolved with the noise scale * X: the support of a
+ * predicted marginal. Output bin b covers x0 + (b + m0) h .. + h. With conv
+ * (n + nk - 1 values) every bin is computed and kept there, for the
+ * posterior box; without, only the bins the two scans reach. */
+static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
+                           real cut_hi, real *k, int *m0_out, real *lo, real *hi, real *conv)
+{
+    int m0, nk, b;
     real c = 0;
     nk = hstpf__grid_kernel(d, scale, h, HSTPF__GRID_K, k, &m0);
     *m0_out = m0;
-    /* output bin b (0 .. n + nk - 2) holds sum_kk k[kk] hist[b - kk] and
-     * covers x0 + (b + m0) h .. + h */
-    for (b = 0; b < n + nk - 1; ++b) {
-        real o = 0;
-        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
-            o += k[kk] * hist[b - kk];
+    if (conv) {
+        for (b = 0; b < n + nk - 1; ++b) {
+            conv[b] = conv_bin(hist, n, k, nk, b);
         }
-        c += o;
+    }
+    for (b = 0; b < n + nk - 1; ++b) {
+        c += conv ? conv[b] : conv_bin(hist, n, k, nk, b);
         if (c > cut_lo) {
             break;
         }
@@ -40,11 +54,7 @@ static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf
     *lo = x0 + (real)(b + m0) * h;
     c = 0;
     for (b = n + nk - 2; b >= 0; --b) {
-        real o = 0;
-        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
-            o += k[kk] * hist[b - kk];
-        }
-        c += o;
+        c += conv ? conv[b] : conv_bin(hist, n, k, nk, b);
         if (c > cut_hi) {
             break;
         }
@@ -65,20 +75,14 @@ static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf
  * prediction, whose width is the Gamma(0.02) noise's rare long jumps).
  * Nothing changes when the measurement misses the prediction (the retry
  * and the reach to the measurement handle that). */
-static void posterior_box(hstpf_t *f, const real *hist, int n, real x0, real h, const real *k, int nk, int m0, real yr,
-                          real *s_lo, real *s_hi)
+static void posterior_box(hstpf_t *f, real *out, int nb, real x0, real h, int m0, real yr, real *s_lo, real *s_hi)
 {
-    real *out = f->grid.work + NS * NV / 2;
     const real lfloor = hstpf__exp_neg(f->de.floor - f->de.lp_max);
     real sum = 0, cut, c;
-    int b, kk, nb, bl, bh;
-    nb = n + nk - 1;
-    for (b = 0; b < nb; ++b) { /* bin b covers x0 + (b + m0) h .. + h */
-        const real x = x0 + (real)(b + m0) * h;
-        real o = 0, lik;
-        for (kk = b - n + 1 > 0 ? b - n + 1 : 0; kk < nk && kk <= b; ++kk) {
-            o += k[kk] * hist[b - kk];
-        }
+    int b, bl, bh;
+    for (b = 0; b < nb; ++b) { /* bin b covers x0 + (b + m0) h .. + h; out[b] the predicted mass */
+        const real x = x0 + (real)(b + m0) * h, o = out[b];
+        real lik;
         lik = o > (real)0 ? hstpf__grid_cell_loglik(&f->de, yr - (x + h), yr - x) - f->de.lp_max : (real)-3e38;
         lik = lik > (real)-80 ? hstpf__exp_neg(lik < (real)0 ? lik : (real)0) : (real)0;
         out[b] = lik > lfloor ? o * lik : (real)0;
@@ -151,9 +155,11 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
                 pull = -1;
             }
         }
-        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi);
-        if (has_y && f->grid.tail > WIDE_TAIL) { /* the same kernel as the predicted box's */
-            posterior_box(f, hist, n, x0, h, f->grid.ks, nk, m0, yr, s_lo, s_hi);
+        const int post = has_y && f->grid.tail > WIDE_TAIL;
+        real *conv = post ? f->grid.work + NS * NV / 2 : NULL; /* after hist's nmax bins */
+        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi, conv);
+        if (post) { /* the predicted box's convolution, weighted in place */
+            posterior_box(f, conv, n + nk - 1, x0, h, m0, yr, s_lo, s_hi);
         }
     }
     /* speeds: each occupied row spread over its image [vimg_j, vimg_j+1] */
@@ -195,7 +201,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     }
     /* the pull moves the speed the same way (through the s-v correlation) */
     (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
-                          (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi);
+                          (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi, NULL);
 }
 
 /* The geometry g = (s0, ds, v0, dv) of the box [s_lo, s_hi] x [v_lo,
