@@ -811,7 +811,7 @@ static void usage(void)
     size_t i;
     fprintf(stderr,
             "usage: hstpf-mc --scenario NAME [--seeds N [--first-seed K]] [--threads N] [--duration S]\n"
-            "  [--truth NAME] [--json FILE] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
+            "  [--truth NAME] [--json FILE|-] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
             "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
@@ -999,12 +999,22 @@ int main(int argc, char **argv)
         pthread_join(th[i], NULL);
     }
 
-    if (json) {
+    if (json && !strcmp(json, "-")) { /* JSON on stdout, the table on stderr (python's "-" convention) */
+        const int fd = dup(STDOUT_FILENO);
+        fflush(stdout);
+        jf = fd >= 0 ? fdopen(fd, "w") : NULL;
+        if (jf == NULL || dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+            perror("--json -");
+            return 1;
+        }
+    } else if (json) {
         jf = fopen(json, "w");
         if (jf == NULL) {
             perror(json);
             return 1;
         }
+    }
+    if (jf) {
         fprintf(jf,
                 "{\"scenario\":\"%s\",\"engine\":\"%s\",\"seeds\":%d,\"duration_s\":%.0f,\"particles\":%u,"
                 "\"results\":[",

@@ -1,0 +1,36 @@
+"""hstpf-mc's --json: "-" is stdout (the table then goes to stderr), a path
+is a file (the table stays on stdout)."""
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+
+@pytest.fixture(scope="module")
+def mc() -> str:
+    build = os.environ.get("HSTPF_BUILD_DIR")
+    exe = Path(build) / "tools" / "montecarlo" / "hstpf-mc" if build else None
+    if exe is None or not exe.is_file():
+        pytest.skip("hstpf-mc is built by CMake: set HSTPF_BUILD_DIR")
+    return str(exe)
+
+
+ARGS = ["--scenario", "paper1", "--seeds", "2", "--duration", "120", "--threads", "1"]
+
+
+def test_json_dash_is_stdout(mc, tmp_path):
+    r = subprocess.run([mc, *ARGS, "--json", "-"], cwd=tmp_path, capture_output=True, text=True, check=True)
+    d = json.loads(r.stdout)
+    assert d["scenario"] == "paper1" and d["seeds"] == 2
+    assert [run["seed"] for run in d["results"][0]["runs"]] == [1, 2]
+    assert "truth" in r.stderr and "success" in r.stderr  # the table
+    assert not (tmp_path / "-").exists()
+
+
+def test_json_file_keeps_the_table_on_stdout(mc, tmp_path):
+    out = tmp_path / "r.json"
+    r = subprocess.run([mc, *ARGS, "--json", str(out)], capture_output=True, text=True, check=True)
+    assert "truth" in r.stdout
+    assert json.loads(out.read_text())["results"][0]["truth"] == "CRH3"
