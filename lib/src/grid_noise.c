@@ -77,7 +77,7 @@ static void conv_row(real *restrict o, real *restrict pad, const real *ks, int n
 /* Step 3: speed noise from work into p (what it would take below 0 goes to
  * rest: a train never reverses), then position noise in place, also on the
  * mass that came to rest within the step; the held mass gets none. Only
- * the rows and columns that can receive mass are visited. */
+ * the rows that can receive mass are computed, each as a whole row. */
 void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
 {
     real *p = f->grid.p[l], *w = f->grid.work, *kv = f->grid.kv, *ks = f->grid.ks;
@@ -86,7 +86,6 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
     int m0v, m0s, nkv, nks, j, k, i, r0 = 0, r1 = -1, c0 = 0, c1 = -1;
     nkv = hstpf__grid_kernel(&f->dv, scale, ng[3], NV - 1, kv, &m0v);
     nks = hstpf__grid_kernel(&f->ds, scale, ng[1], NS - 1, ks, &m0s);
-    memset(p, 0, sizeof f->grid.p[l]);
     if (box[1] >= box[0]) {
         r0 = box[0] + m0v;
         r1 = box[1] + m0v + nkv - 1;
@@ -125,6 +124,12 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
             }
         }
     }
+    if (r1 < r0) { /* no row receives mass */
+        r0 = NV;
+        r1 = NV - 1;
+    }
+    memset(p, 0, sizeof(real) * (size_t)(r0 * NS)); /* the rows below and above those computed */
+    memset(p + (r1 + 1) * NS, 0, sizeof(real) * (size_t)((NV - 1 - r1) * NS));
     if (!(nks == 1 && m0s == 0)) { /* work is free now: the padded rows */
         memset(w, 0, sizeof(real) * (size_t)(NS + nks - 1));
         for (j = r0; j <= r1; ++j) {
