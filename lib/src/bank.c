@@ -305,7 +305,7 @@ static void advance_time(hstpf_t *f, double dt)
 
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
 {
-    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0;
+    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh;
     const hstpf__engine_t *e;
     hstpf__step_t st;
     if (f == NULL || in == NULL) {
@@ -387,7 +387,12 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
          * held, a time base that broke); a run of these re-acquires */
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + 1u) : 0u;
     }
-    if (has_y && !f->weights_wait) {
+    /* The first such fix after fixes they fitted is taken for an outlier
+     * (a heavy-tailed noise's): it moves no weight. Otherwise a model at
+     * the weight floor that happens to lie near it would take all the
+     * weight for that step. A second one in a row moves them as usual. */
+    weigh = has_y && !f->weights_wait && f->lost_run != 1u;
+    if (weigh) {
         update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {
@@ -402,7 +407,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         hstpf__update_declaration(f, in->dt_s, 0);
         return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
     }
-    hstpf__update_declaration(f, in->dt_s, has_y && !f->weights_wait);
+    hstpf__update_declaration(f, in->dt_s, weigh);
     hstpf__rebase(f);
     if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {
         ++f->reacquired;
