@@ -282,6 +282,9 @@ static int weights_hold(hstpf_t *f, double dt)
     return f->arrival_s <= HSTPF__ARRIVAL_MAX_S ? 1 : 0;
 }
 
+/* Whether every hypothesis that carries weight put this fix beyond its
+ * floor: the rows and, when it carries weight, the continuous one (while
+ * it alone carries the weight, the rows' misses say nothing). */
 static int all_lost(const hstpf_t *f)
 {
     double wb[HSTPF_MAX_MODELS + 1];
@@ -292,7 +295,7 @@ static int all_lost(const hstpf_t *f)
             return 0;
         }
     }
-    return 1;
+    return !(f->rf.active && wb[f->cfg.n_models] > 0.0 && !f->rf.floored);
 }
 
 /* Time passes without a lock: only the pending fix ages. */

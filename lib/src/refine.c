@@ -141,6 +141,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
     double g = 0.0, a, vd;
     double f0[NZ] = {1.0, 0.0, 0.0, 0.0, 0.0, 0.0}, f1[NZ];
     int i;
+    r->floored = 0;
     if (c->n_track > 0u) {
         g = (double)hstpf__track_acc(f, &r->track_hint, (hstpf_real_t)z[0]);
     }
@@ -181,6 +182,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
             ll = -0.5 * zz * zz;
         } else {
             ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
+            r->floored = 1;
             zz = zz > 0.0 ? zf : -zf; /* Huber: the update sees the clipped innovation */
         }
         r->loglik = ll - 0.5 * log(6.283185307179586 * sy);

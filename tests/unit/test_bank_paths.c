@@ -636,6 +636,39 @@ static void test_outlier_moves_no_weight(void **state)
     }
 }
 
+/* While the continuous hypothesis alone carries the weight and fits the
+ * fixes, fixes the rows put beyond their floor are not a lost lock: the
+ * estimate stays valid and nothing is re-acquired. The rows' states are
+ * moved 500 m off and their weights to the floor; before, every fix then
+ * counted as lost (the rows alone were asked) and the fifth dropped the
+ * lock (grade8: 133 re-acquisitions in 51 runs). */
+static void test_lock_kept_by_continuous(void **state)
+{
+    hstpf_config_t c;
+    double t;
+    int l, k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    c.refine = 1;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    t = run_fixes(0.0, 30);
+    assert_true(f.rf.active);
+    for (l = 0; l < 2; ++l) {
+        f.m[l].kx[0] += 500.0;
+        f.m[l].s_mean += (hstpf_real_t)500.0;
+        f.m[l].logq = log(c.q_floor);
+    }
+    f.rf.logq = log(1.0 - 2.0 * c.q_floor);
+    for (k = 1; k <= 2 * (int)c.reacquire_after; ++k) {
+        assert_int_equal(step(1.0, u_hold(), fix_at(t + k), 1), HSTPF_OK);
+        if (!est().valid) {
+            fail_msg("fix %d after the rows moved: invalid", k);
+        }
+    }
+    assert_int_equal(est().reacquired, 0);
+}
+
 /* States that no input produces (the engines clamp speeds at 0, theta is a
  * mixture of non-negative rows): injected into a locked instance, each
  * must read valid = 0 (hstpf.h: "every published value finite and within
@@ -730,6 +763,7 @@ int main(void)
         cmocka_unit_test(test_grid_standing_redraw),
         cmocka_unit_test(test_table_sliver),
         cmocka_unit_test(test_outlier_moves_no_weight),
+        cmocka_unit_test(test_lock_kept_by_continuous),
         cmocka_unit_test(test_validity_injected),
         cmocka_unit_test(test_nonfinite_paths),
     };

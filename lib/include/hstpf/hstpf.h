@@ -470,6 +470,7 @@ typedef struct {
     double logq, loglik, nis;                     /* nis: running mean of z^2 */
     uint16_t track_hint;
     uint8_t held, active, placed;
+    uint8_t floored;                              /* this fix beyond its likelihood floor */
 } hstpf_refine_t;
 
 /**
