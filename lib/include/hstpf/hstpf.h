@@ -229,9 +229,12 @@ typedef struct {
     /** Measurements farther than this from the predicted position are
      *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000). */
     double gate_m;
-    /** After this many consecutive gated measurements the next one is
-     *  taken as a new first fix (particles redrawn there, model weights
-     *  kept): a real jump of the position reference is re-acquired. 0 =
+    /** After this many consecutive gated measurements, or measurements
+     *  beyond the likelihood floor of every weighted hypothesis, the next
+     *  one is taken as a new first fix (particles redrawn there, model
+     *  weights kept): a real jump of the position reference is
+     *  re-acquired. The first measurement of such a run moves no model
+     *  weight (an outlier of a heavy-tailed noise; docs/model.md). 0 =
      *  never (5). */
     uint16_t reacquire_after;
     /** A model whose every particle was at the likelihood floor for this
