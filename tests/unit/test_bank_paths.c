@@ -37,6 +37,13 @@ static void base_config(hstpf_config_t *c, hstpf_engine_t engine, uint16_t n_mod
     c->engine = engine;
 }
 
+/* The instance from c, with a workspace for its engine. */
+static void start(hstpf_config_t *c)
+{
+    tu_workspace(c, 0);
+    assert_int_equal(hstpf_init(&f, sizeof f, c), HSTPF_OK);
+}
+
 /* Traction that holds the first row at V_TRUE on the flat: u = W(v). */
 static double u_hold(void)
 {
@@ -96,8 +103,7 @@ static void test_acquire_noise_mean(void **state)
         c.noise_v.shape = 4.0;
         c.noise_v.scale = 0.25;
         c.noise_e.sd = 0.05;
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         assert_int_equal(step(1.0, u_hold(), Y0, 1), HSTPF_OK);
         assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE, 1), HSTPF_OK);
         e = est();
@@ -143,8 +149,7 @@ static void test_refusals(void **state)
     assert_string_equal(field, "");
 
     /* good data after the refusals: it runs */
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     (void)run_fixes(0.0, 20);
     e = est();
     assert_true(e.valid);
@@ -216,8 +221,7 @@ static void test_refine_engines(void **state)
         }
         c.refine = 1;
         c.refine_prior_q = 0.4;
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         (void)run_fixes(0.0, 30);
         e = est();
         assert_true(e.valid);
@@ -244,8 +248,7 @@ static void test_declare_hold_zero(void **state)
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
     c.declare_hold_s = 0.0;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     for (k = 0; k < 600; ++k) {
         hstpf_estimate_t e;
         t = run_fixes(t, 1);
@@ -276,8 +279,7 @@ static void test_q_floor_top(void **state)
     c.refine_prior_q = 0.5;
     c.q_floor = 0.6;
     c.withdraw_threshold = 0.6;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     for (k = 0; k < 60; ++k) {
         hstpf_estimate_t e;
         (void)run_fixes((double)k, 1);
@@ -320,14 +322,12 @@ static void test_roughening_off(void **state)
         c.roughening_k = 0.0;
         c.rough_min_s = 0.0;
         c.rough_min_v = 0.0;
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         (void)run_fixes(0.0, 10);
         assert_true(distinct_positions() < 100);
         assert_true(est().valid);
         c.roughening_k = 0.2;
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         (void)run_fixes(0.0, 10);
         assert_int_equal(distinct_positions(), 100);
     }
@@ -360,8 +360,7 @@ static void test_pending_fix_expires(void **state)
         hstpf_config_t c;
         hstpf_estimate_t e;
         base_config(&c, engines[i], 2);
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
         for (k = 1; k <= 31; ++k) { /* 31 s without a fix: beyond max_gap_s = 30 */
             assert_int_equal(step(1.0, u_hold(), 0.0, 0), HSTPF_OK);
@@ -399,8 +398,7 @@ static void test_beyond_ranges_invalid(void **state)
         c.init_speed_mps = 100.0;
         c.init_speed_sd = 1.0;
         /* position: 500 m short of the limit at 100 m/s, held (u = W) */
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         assert_int_equal(step(1.0, 0.0, HSTPF_POS_MAX_M - 500.0, 1), HSTPF_OK);
         e = est();
         assert_true(e.valid);
@@ -416,8 +414,7 @@ static void test_beyond_ranges_invalid(void **state)
             }
         }
         /* speed: full traction, about 9 m/s^2, passes 200 m/s within 15 s */
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         assert_int_equal(step(1.0, 0.0, 1000.0, 1), HSTPF_OK);
         for (k = 1; k <= 20; ++k) {
             assert_int_equal(step(1.0, HSTPF_U_MAX, 0.0, 0), HSTPF_OK);
@@ -454,8 +451,7 @@ static void test_lost_model_redrawn(void **state)
         rows[1].c2 = 0.01;
         c.model_reacquire_after = 2;
         c.q_floor = 1e-6;
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         (void)run_fixes(0.0, 120);
         e = est();
         if (e.model[1].reacquired == 0) {
@@ -485,8 +481,7 @@ static void test_grid_tiny_noise(void **state)
     c.noise_s.sd = 1e-3;
     c.noise_v.sd = 1e-3;
     c.noise_e.sd = 1e-3;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     for (k = 0; k <= 30; ++k) {
         assert_int_equal(step(1.0, u_hold(), Y0 + V_TRUE * k, 1), HSTPF_OK);
     }
@@ -516,8 +511,7 @@ static void test_grid_slow_redraw(void **state)
     c.noise_e.sd = 0.05;
     c.model_reacquire_after = 2;
     c.q_floor = 1e-6;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     for (k = 0; k <= 120; ++k) {
         const double u = hstpf_resistance(&rows[0], 2.0);
         assert_int_equal(step(1.0, u, Y0 + 2.0 * k, 1), HSTPF_OK);
@@ -551,8 +545,7 @@ static void test_grid_standing_redraw(void **state)
     c.noise_e.sd = 0.05;
     c.model_reacquire_after = 2;
     c.q_floor = 1e-6;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     for (k = 0; k <= 180; ++k) {
         assert_int_equal(step(1.0, 40.0, Y0 + 0.02 * sin(1.7 * k), 1), HSTPF_OK);
     }
@@ -617,8 +610,7 @@ static void test_outlier_moves_no_weight(void **state)
         hstpf_estimate_t before, after;
         double t;
         base_config(&c, engines[e], 2);
-        tu_workspace(&c, 0);
-        assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+        start(&c);
         t = run_fixes(0.0, 40);
         before = est();
         assert_true(before.valid);
@@ -650,8 +642,7 @@ static void test_lock_kept_by_continuous(void **state)
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
     c.refine = 1;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     t = run_fixes(0.0, 30);
     assert_true(f.rf.active);
     for (l = 0; l < 2; ++l) {
@@ -680,8 +671,7 @@ static void test_validity_injected(void **state)
     int i;
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     (void)run_fixes(0.0, 10);
     good = f;
     assert_true(est().valid);
@@ -712,8 +702,7 @@ static void test_nonfinite_paths(void **state)
     hstpf_estimate_t e;
     (void)state;
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    start(&c);
     (void)run_fixes(0.0, 30);
     e = est();
     assert_true(fabs((double)e.model[0].q - 0.5) > 0.01); /* the data moved the weights */
