@@ -19,7 +19,7 @@ typedef hstpf_real_t real;
 #define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
 #define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
 #define PULL_SD 2.0            /* measurement beyond this many sd: keep that tail */
-#define KERN_TAIL ((real)1e-7)  /* extent of the noise kernels and the prior */
+#define KERN_TAIL ((real)1e-5)  /* extent of the placement prior */
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
 #define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
@@ -67,8 +67,8 @@ static inline void hstpf__grid_axpy_row(real *restrict o, const real *restrict r
 void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi);
 /* P(a < X <= b), a <= b, from the quantile tables (the sampler's CDF). */
 real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b);
-/* The quantile at KERN_TAIL (upper = 0) or 1 - KERN_TAIL. */
-real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper);
+/* The quantile at tail (upper = 0) or 1 - tail. */
+real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper, real tail);
 /* Log of the mean density of d over [a, b], a < b; -3e38 for zero. */
 real hstpf__grid_cell_loglik(const hstpf_dist_t *d, real a, real b);
 
@@ -99,9 +99,10 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
 
 /* ---- grid_noise.c: step 3 ---------------------------------------------- */
 
-/* The cell masses of the noise scale * X on cells of width h, within
- * +-reach cells: k[0..n), first offset *m0; returns n. */
-int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k, int *m0);
+/* The cell masses of the noise scale * X on cells of width h, between its
+ * tail quantiles and within +-reach cells: k[0..n), first offset *m0;
+ * returns n. */
+int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real tail, real *k, int *m0);
 /* The process noise convolved into model l's cells from f->grid.work. */
 void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng);
 

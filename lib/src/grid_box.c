@@ -33,12 +33,12 @@ static real conv_bin(const real *hist, int n, const real *k, int nk, int b)
  * predicted marginal. Output bin b covers x0 + (b + m0) h .. + h. With conv
  * (n + nk - 1 values) every bin is computed and kept there, for the
  * posterior box; without, only the bins the two scans reach. */
-static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real cut_lo,
-                           real cut_hi, real *k, int *m0_out, real *lo, real *hi, real *conv)
+static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real tail,
+                           real cut_lo, real cut_hi, real *k, int *m0_out, real *lo, real *hi, real *conv)
 {
     int m0, nk, b;
     real c = 0;
-    nk = hstpf__grid_kernel(d, scale, h, HSTPF__GRID_K, k, &m0);
+    nk = hstpf__grid_kernel(d, scale, h, HSTPF__GRID_K, tail, k, &m0);
     *m0_out = m0;
     if (conv) {
         for (b = 0; b < n + nk - 1; ++b) {
@@ -113,8 +113,9 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
     const real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
     const int nmax = NS * NV / 4;
     real *hist = f->grid.work;
-    const real rs = scale * (hstpf__grid_tail_quantile(&f->ds, 1) - hstpf__grid_tail_quantile(&f->ds, 0));
-    const real rv = scale * (hstpf__grid_tail_quantile(&f->dv, 1) - hstpf__grid_tail_quantile(&f->dv, 0));
+    const real tail = f->grid.tail; /* the kernels reach as far as the box */
+    const real rs = scale * (hstpf__grid_tail_quantile(&f->ds, 1, tail) - hstpf__grid_tail_quantile(&f->ds, 0, tail));
+    const real rv = scale * (hstpf__grid_tail_quantile(&f->dv, 1, tail) - hstpf__grid_tail_quantile(&f->dv, 0, tail));
     real h, x0;
     int n, j, b, pull = 0;
     /* positions: each occupied row shifted by T times its centre speed */
@@ -157,7 +158,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         }
         const int post = has_y && f->grid.tail > WIDE_TAIL;
         real *conv = post ? f->grid.work + NS * NV / 2 : NULL; /* after hist's nmax bins */
-        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi, conv);
+        int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, tail, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi, conv);
         if (post) { /* the predicted box's convolution, weighted in place */
             posterior_box(f, conv, n + nk - 1, x0, h, m0, yr, s_lo, s_hi);
         }
@@ -200,7 +201,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         hist[b] += rm;
     }
     /* the pull moves the speed the same way (through the s-v correlation) */
-    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
+    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, tail, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
                           (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi, NULL);
 }
 
@@ -246,7 +247,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     tot = hstpf__grid_sum(p, NS * NV);
     rtot = hstpf__grid_sum(rest, NS);
     tot += rtot;
-    thr = KERN_TAIL * tot / (real)(NS * NV);
+    thr = f->grid.tail * tot / (real)(NS * NV);
     for (j = 0; j < NV; ++j) {
         const real *r = p + j * NS, sh = dt * (g[2] + ((real)j + (real)0.5) * g[3]);
         int a = 0, b = NS - 1;

@@ -80,11 +80,11 @@ real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b)
     return p > (real)0 ? p : (real)0;
 }
 
-/* Quantile at probability KERN_TAIL (upper = 0) or 1 - KERN_TAIL: the
- * sampler's own inverse CDF at that point. */
-real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper)
+/* Quantile at probability tail (upper = 0) or 1 - tail: the sampler's own
+ * inverse CDF at that point. */
+real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper, real tail)
 {
-    const uint32_t r = (uint32_t)(KERN_TAIL * (real)4294967296.0);
+    const uint32_t r = (uint32_t)(tail * (real)4294967296.0);
     return hstpf__dist_sample(d, upper ? ~r : r);
 }
 

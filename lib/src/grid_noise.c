@@ -6,12 +6,13 @@
 #include "grid.h"
 
 /* Kernel of the noise scale * X on cells of width h: k[m - m0] = P(noise in
- * cell m) / P(noise within the KERN_TAIL quantiles), for the offsets m in
+ * cell m) / P(noise within its tail quantiles), for the offsets m in
  * [m0, m0 + n) that lie within +-reach cells (farther ones cannot land on
  * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
-int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real *k, int *m0)
+int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real tail, real *k, int *m0)
 {
-    const real lo = scale * hstpf__grid_tail_quantile(d, 0) / h, hi = scale * hstpf__grid_tail_quantile(d, 1) / h;
+    const real lo = scale * hstpf__grid_tail_quantile(d, 0, tail) / h;
+    const real hi = scale * hstpf__grid_tail_quantile(d, 1, tail) / h;
     const int cap = (HSTPF__GRID_K - 1) / 2;
     int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
     real sum = 0, total, el, eh;
@@ -84,8 +85,8 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
     real *rest = f->grid.rest[l], *rpend = f->grid.rpend;
     int16_t *box = f->grid.box;
     int m0v, m0s, nkv, nks, j, k, i, r0 = 0, r1 = -1, c0 = 0, c1 = -1;
-    nkv = hstpf__grid_kernel(&f->dv, scale, ng[3], NV - 1, kv, &m0v);
-    nks = hstpf__grid_kernel(&f->ds, scale, ng[1], NS - 1, ks, &m0s);
+    nkv = hstpf__grid_kernel(&f->dv, scale, ng[3], NV - 1, f->grid.tail, kv, &m0v);
+    nks = hstpf__grid_kernel(&f->ds, scale, ng[1], NS - 1, f->grid.tail, ks, &m0s);
     if (box[1] >= box[0]) {
         r0 = box[0] + m0v;
         r1 = box[1] + m0v + nkv - 1;
