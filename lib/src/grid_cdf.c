@@ -22,18 +22,29 @@ static real pow2m32(int k)
  * (nodes increase), -1 for the upper. */
 static real tail_prob(const real *tab, real x, int dir)
 {
-    int k;
+    /* the first node j in [1, QSHIFT] beyond x (QSHIFT + 1: none), by a
+     * binary search without a branch on the comparison: a kernel's tail taps
+     * each scanned up to 24 nodes one by one */
+    const real *base = tab + 1;
+    int len = HSTPF__QSHIFT, j, k;
     if ((real)dir * (x - tab[0]) < (real)0) {
         return 0;
     }
-    for (k = 0; k < HSTPF__QSHIFT; ++k) {
-        if ((real)dir * (x - tab[k + 1]) < (real)0) {
-            const real w = tab[k + 1] - tab[k];
-            const real fr = w != (real)0 ? (x - tab[k]) / w : (real)1;
-            return pow2m32(k) * ((real)1 + fr);
-        }
+    while (len > 1) {
+        const int half = len / 2;
+        base = (real)dir * (x - base[half - 1]) < (real)0 ? base : base + half;
+        len -= half;
     }
-    return pow2m32(HSTPF__QSHIFT);
+    j = (int)(base - tab) + ((real)dir * (x - *base) < (real)0 ? 0 : 1);
+    if (j > HSTPF__QSHIFT) {
+        return pow2m32(HSTPF__QSHIFT);
+    }
+    k = j - 1;
+    {
+        const real w = tab[k + 1] - tab[k];
+        const real fr = w != (real)0 ? (x - tab[k]) / w : (real)1;
+        return pow2m32(k) * ((real)1 + fr);
+    }
 }
 
 /* P(X <= x) into *lo and P(X > x) into *hi, each computed on its own side
