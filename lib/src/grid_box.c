@@ -228,8 +228,8 @@ void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g)
 /* Step 1: the new box from the transported support plus the noise
  * quantiles, into ng (s0, ds, v0, dv); sets f->grid.first/last (the
  * occupied cells of each row) and vimg for the transport. A cell is
- * occupied when it holds more than KERN_TAIL / cells of the mass, so that
- * at most KERN_TAIL is left behind; the box is the bounding box of the
+ * occupied when it holds more than f->grid.tail / cells of the mass, so
+ * that at most the box's own tail is left behind; the box is the bounding box of the
  * occupied cells after the dynamics (each row moved by T times its centre
  * speed), so a correlated posterior does not inflate it. */
 void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y,
