@@ -6,10 +6,10 @@
  *   whole Case 1 run (1800 s, the paper's three models), steps where
  *   either engine is at its likelihood floor left out (each has its own
  *   convention there): the true model's within 0.25 nats at every step
- *   and 0.015 on average (measured at 20 x 72: 0.20 and 0.012; at 48 x 48
+ *   and 0.015 on average (measured at 20 x 72: 0.21 and 0.012; at 48 x 48
  *   0.12 and 0.008: twenty position cells span the posterior's +-4.3 sd,
  *   and one step in 1781 differs by 0.2); every
- *   model's within 3 nats and 0.08 on average (measured 2.1 and 0.05: a
+ *   model's within 3 nats and 0.08 on average (measured 2.3 and 0.066: a
  *   model the measurements pull away from its prediction has its
  *   posterior in the predicted tails, which the box cuts at 1e-5 on the
  *   side away from the measurement, docs/grid.md).
@@ -20,9 +20,10 @@
  *   REF_RUNS independent runs give its Monte Carlo standard error se. The
  *   grid's sums must lie within 4 se + 0.04 nats per step of the reference
  *   mean. The 0.04 is the grid's own bias, not Monte Carlo error: at
- *   20 x 72 the true model's sum is 0.019 nats per step below the
- *   reference (5.7 of 219 nats over 300 s; cells of a few millimetres
- *   under the unbounded Gamma(0.5) measurement density), CRH5's 0.013.
+ *   20 x 72 the true model's sum is 0.009 nats per step below the
+ *   reference (2.6 of 219 nats over 300 s; cells of a few millimetres
+ *   under the unbounded Gamma(0.5) measurement density), CRH5's 0.003
+ *   (0.019 and 0.008 while the kernels reached 1e-7, docs/grid.md).
  * - Bit-for-bit determinism: two instances with different seeds give
  *   identical estimates at every step (the grid has no RNG), and a reset
  *   run repeats the first.
