@@ -11,6 +11,11 @@
 #include "track.h"
 
 #define REBASE_M 1024.0 /* re-centre the float positions past this distance */
+/* Two fixes closer than this carry no speed: the speed's variance 2R/t^2
+ * would overflow (a step of 1e-309 s is in dt's documented range); the
+ * later fix waits for the next instead. 1e-6 s: the shortest time the
+ * configuration takes (dt_nominal_s, max_gap_s). */
+#define ACQ_T12_MIN 1e-6
 
 /* Lock from fixes: with a configured speed prior the first fix starts the
  * filter; otherwise a fix waits for the next one (at most max_gap_s later,
@@ -24,7 +29,7 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     q.t12 = 0.0;
     if (f->cfg.init_speed_sd <= 0.0) {
         const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
-        if (!f->have_pend || !(t <= f->cfg.max_gap_s) ||
+        if (!f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
             f->have_pend = 1;
             f->pend_y = y;
