@@ -19,7 +19,6 @@ typedef hstpf_real_t real;
 #define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
 #define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
 #define PULL_SD 2.0            /* measurement beyond this many sd: keep that tail */
-#define PRIOR_TAIL ((real)1e-5) /* extent of the placement prior */
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
 #define MASS_MIN ((real)1e-30)  /* a cell below this is empty */

@@ -20,7 +20,7 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     const hstpf_config_t *c = &f->cfg;
     real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
     const real y2 = (real)q->y2, y1 = (real)q->y1, t = (real)q->t12;
-    const real el = hstpf__grid_tail_quantile(&f->de, 0, PRIOR_TAIL), eh = hstpf__grid_tail_quantile(&f->de, 1, PRIOR_TAIL);
+    const real el = hstpf__grid_tail_quantile(&f->de, 0, GRID_TAIL), eh = hstpf__grid_tail_quantile(&f->de, 1, GRID_TAIL);
     real s_lo = y2 - eh, s_hi = y2 - el, v_lo, v_hi, tot = 0, cs = 0, mus = 0, sdv = 0;
     const real v0 = (real)q->v0;
     int i, j;
@@ -33,8 +33,8 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         v_hi = (s_hi - y1 + eh - mus) / t + cs;
     } else {
         sdv = (real)c->init_speed_sd;
-        v_lo = v0 + sdv * hstpf__grid_tail_quantile(&f->unit, 0, PRIOR_TAIL);
-        v_hi = v0 + sdv * hstpf__grid_tail_quantile(&f->unit, 1, PRIOR_TAIL);
+        v_lo = v0 + sdv * hstpf__grid_tail_quantile(&f->unit, 0, GRID_TAIL);
+        v_hi = v0 + sdv * hstpf__grid_tail_quantile(&f->unit, 1, GRID_TAIL);
     }
     v_lo = v_lo > (real)0 ? v_lo : (real)0;
     v_hi = v_hi > v_lo ? v_hi : v_lo;

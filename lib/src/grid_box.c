@@ -137,7 +137,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         /* the side the measurement lies on keeps its tail to WIDE_TAIL: a
          * model the measurements pull away from its prediction has its
          * posterior there (cutting it would bias every misfit model) */
-        real cut_lo = f->grid.tail * tot, cut_hi = cut_lo;
+        real cut_lo = tail * tot, cut_hi = cut_lo;
         if (has_y) {
             double m1 = 0.0, m2 = 0.0, sd;
             for (b = 0; b < n; ++b) {
@@ -156,7 +156,7 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
                 pull = -1;
             }
         }
-        const int post = has_y && f->grid.tail > WIDE_TAIL;
+        const int post = has_y && tail > WIDE_TAIL;
         real *conv = post ? f->grid.work + NS * NV / 2 : NULL; /* after hist's nmax bins */
         int m0, nk = noisy_quantiles(hist, n, x0, h, &f->ds, scale, tail, cut_lo, cut_hi, f->grid.ks, &m0, s_lo, s_hi, conv);
         if (post) { /* the predicted box's convolution, weighted in place */
@@ -201,8 +201,8 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         hist[b] += rm;
     }
     /* the pull moves the speed the same way (through the s-v correlation) */
-    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, tail, (pull < 0 ? WIDE_TAIL : f->grid.tail) * tot,
-                          (pull > 0 ? WIDE_TAIL : f->grid.tail) * tot, f->grid.kv, &j, v_lo, v_hi, NULL);
+    (void)noisy_quantiles(hist, n, x0, h, &f->dv, scale, tail, (pull < 0 ? WIDE_TAIL : tail) * tot,
+                          (pull > 0 ? WIDE_TAIL : tail) * tot, f->grid.kv, &j, v_lo, v_hi, NULL);
 }
 
 /* The geometry g = (s0, ds, v0, dv) of the box [s_lo, s_hi] x [v_lo,

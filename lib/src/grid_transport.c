@@ -6,6 +6,13 @@
 
 #include "grid.h"
 
+/* floor(x) for x within int32_t's range, without a branch (so that a loop
+ * calling it still vectorises) */
+static int32_t floor_i(real x)
+{
+    const int32_t k = (int32_t)x;
+    return k - ((real)k > x);
+}
 
 /* The remap below for w = 1 (input cells as wide as the output's: the box's
  * position histogram, nearly always), when input cell i0 + t lands on
@@ -27,12 +34,10 @@ static int remap_unit(const real *in, int i0, int i1, real a, real *out, int n_o
     if (n < 1 || n > NS || !(a + (real)i0 >= (real)0) || !(a + (real)i1 < (real)(n_out - 1))) {
         return 0; /* (and every conversion below is in range) */
     }
-    k0 = (int32_t)(a + (real)i0);
-    k0 -= (real)k0 > a + (real)i0; /* floor */
+    k0 = floor_i(a + (real)i0);
     for (t = 0; t < n; ++t) {
         const real x0 = a + (real)(i0 + t), m = in[i0 + t];
-        const int32_t ki = (int32_t)x0;
-        const int32_t k = ki - ((real)ki > x0);   /* floor */
+        const int32_t k = floor_i(x0);
         const real fr = (real)(k + 1) - x0;       /* times 1 / w = 1; <= 1, so the loop's cap is a no-op */
         const real keep = (real)!(m <= MASS_MIN); /* the loop skips these: add zeros */
         const real pl = m * fr;
@@ -68,8 +73,7 @@ void hstpf__grid_remap(const real *in, int i0, int i1, real a, real w, real *out
         if (m <= MASS_MIN || x1 <= (real)0 || x0 >= (real)n_out) {
             continue;
         }
-        k = (int32_t)x0;
-        k -= (real)k > x0 ? 1 : 0; /* floor */
+        k = floor_i(x0);
         if (w <= (real)1 && k >= 0 && k + 1 < n_out) { /* one or two cells, without a branch on which */
             real fr = ((real)(k + 1) - x0) * inv;
             fr = fr < (real)1 ? fr : (real)1;
