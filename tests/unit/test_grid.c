@@ -298,7 +298,7 @@ static void test_case2_vs_particle_reference(void **state)
     hstpf_sim_t sim;
     static hstpf_sim_sample_t ys[REF_STEPS + 1];
     static double us[REF_STEPS + 1], gl[3][REF_STEPS + 1], cum[REF_RUNS][REF_STEPS + 1];
-    int k, l, run;
+    int k, l, run, n_cov = 0, cov_s = 0, cov_v = 0;
     (void)state;
     setup(2, 3, &sc, &c, m);
     tu_workspace(&c, 0);
@@ -318,7 +318,19 @@ static void test_case2_vs_particle_reference(void **state)
         for (l = 0; l < 3; ++l) {
             gl[l][k] = k > 0 ? gl[l][k - 1] + (double)e.model[l].loglik : 0.0;
         }
+        if (k >= 30) { /* the published 95 % intervals, once the weights settled */
+            ++n_cov;
+            cov_s += fabs(e.position_m - ys[k].s) <= 1.96 * e.position_sd_m;
+            cov_v += fabs((double)e.speed_mps - ys[k].v) <= 1.96 * (double)e.speed_sd_mps;
+        }
     }
+    /* intervals of millimetres: they cover the truth in 94-98 % of steps
+     * 30-300 (`hstpf-mc --scenario paper2 --trace`, seeds 1-6); 0.85 leaves
+     * room for one run's correlated steps. While the variance was taken in
+     * one pass about the origin they covered 20 % and 31 %. */
+    print_message("95 %% intervals cover the truth: position %.3f, speed %.3f of %d steps\n", (double)cov_s / n_cov,
+                  (double)cov_v / n_cov, n_cov);
+    assert_true(cov_s >= 0.85 * n_cov && cov_v >= 0.85 * n_cov);
     for (l = 0; l < 3; ++l) {
         double s1 = 0.0, s2 = 0.0, mean, se;
         int kmin = REF_STEPS;

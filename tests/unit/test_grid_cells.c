@@ -15,12 +15,18 @@
  *   node's, 2^(k-32); it never decreases along a sweep; between nodes k
  *   and k + 1 it lies between theirs; a Gaussian's lies within a factor 2
  *   of erfc's.
+ * - The moments (hstpf__grid_moments) of cells placed by hand 1000 m from
+ *   the origin, a millimetre wide, whose mass sums to 1 + 4e-7 (float
+ *   round-off is of that order): mean, variance (with each cell's width^2
+ *   / 12) and the mass at rest counted at v = 0, derived by hand. The
+ *   one-pass s2 - s1^2 about the origin gave a variance of 0 here.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "grid.h"
+#include "testbuild.h"
 #include "testutil.h"
 
 #define NOUT 24
@@ -156,11 +162,63 @@ static void test_cdf_tails(void **state)
     }
 }
 
+static hstpf_t gf; /* static, as on a target */
+
+static void test_moments_by_hand(void **state)
+{
+    static const char *const names[] = {"CRH1", "CRH3", "CRH5"};
+    hstpf_theta_t rows[3];
+    hstpf_config_t c;
+    hstpf_real_t *p, *rest, *g;
+    const hstpf_real_t h = (hstpf_real_t)0.5 * (hstpf_real_t)(1.0 + 4e-7);
+    (void)state;
+    tu_config_rows(&c, rows, names, 3);
+    c.engine = HSTPF_ENGINE_GRID;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
+    p = gf.grid.p[0];
+    rest = gf.grid.rest[0];
+    g = gf.grid.geom[0];
+    memset(p, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS * HSTPF_GRID_NV);
+    memset(rest, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS);
+    g[0] = 1000; /* positions from 1000 m, cells of 1 mm; speeds from 80 m/s, 2 mm/s */
+    g[1] = (hstpf_real_t)0.001;
+    g[2] = 80;
+    g[3] = (hstpf_real_t)0.002;
+    /* half the mass at (s, v) cell (5, 10), half at (6, 11): centres
+     * 1000.0055 / 1000.0065 m and 80.021 / 80.023 m/s */
+    p[10 * HSTPF_GRID_NS + 5] = h;
+    p[11 * HSTPF_GRID_NS + 6] = h;
+    hstpf__grid_moments(&gf, &gf.m[0], 0);
+    /* mean 1000.006 m and 80.022 m/s; variance 0.0005^2 + width^2 / 12 */
+    TU_CLOSE((double)gf.m[0].s_mean, 1000.006, 1e-4); /* the float's ulp at 1000 m is 6e-5 */
+    TU_CLOSE((double)gf.m[0].s_var, 0.25e-6 + 1e-6 / 12.0, 1e-9);
+    TU_CLOSE((double)gf.m[0].v_mean, 80.022, 1e-5);
+    TU_CLOSE((double)gf.m[0].v_var, 1e-6 + 4e-6 / 12.0, 1e-9);
+    TU_CLOSE((double)gf.m[0].ess, 2.0, 1e-5);
+    /* a quarter of the mass at rest instead (v = 0, position cell 6):
+     * v's mean 0.75 x 80.022, its variance the mixture's */
+    p[11 * HSTPF_GRID_NS + 6] = (hstpf_real_t)0.25;
+    rest[6] = (hstpf_real_t)0.25;
+    hstpf__grid_moments(&gf, &gf.m[0], 0);
+    {
+        const double tot = (double)h + 0.5, w1 = (double)h / tot, w2 = 0.25 / tot, w0 = 0.25 / tot;
+        const double vm = w1 * 80.021 + w2 * 80.023, sm = 1000.0 + w1 * 0.0055 + (w2 + w0) * 0.0065;
+        const double vv = w1 * 80.021 * 80.021 + w2 * 80.023 * 80.023 - vm * vm + (w1 + w2) * 4e-6 / 12.0;
+        const double sv = w1 * 0.0055 * 0.0055 + (w2 + w0) * 0.0065 * 0.0065 - (sm - 1000.0) * (sm - 1000.0);
+        TU_CLOSE((double)gf.m[0].v_mean, vm, 1e-4);
+        TU_CLOSE((double)gf.m[0].v_var, vv, 1e-3 * vv);
+        TU_CLOSE((double)gf.m[0].s_mean, sm, 1e-4);
+        TU_CLOSE((double)gf.m[0].s_var, sv + 1e-6 / 12.0, 1e-9);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_remap_reference),
         cmocka_unit_test(test_cdf_tails),
+        cmocka_unit_test(test_moments_by_hand),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
