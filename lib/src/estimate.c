@@ -61,14 +61,16 @@ static int in_ranges(const hstpf_estimate_t *o)
 /* A row's spread for the band: its likelihood is computed at the nominal
  * coefficients, but a real train of that type is spread around them (load,
  * wear, wind, coupling: refine_spread, docs/model.md) by more than the data can resolve
- * (Cramer-Rao, docs/results.md). Only with the continuous hypothesis on:
- * without it the rows are the paper's points. */
+ * (Cramer-Rao, docs/results.md). With cfg.refine, also where the engine
+ * or the noise leaves the continuous hypothesis out (the spread is the
+ * trains', not the hypothesis'); without it the rows are the paper's
+ * points. */
 static void row_spread(const hstpf_t *f, uint16_t l, double w, double *cov)
 {
     const double rho = f->cfg.refine_spread;
     const double c[3] = {f->theta[l].c0, f->theta[l].c1, f->theta[l].c2};
     int i;
-    if (!f->rf.active) {
+    if (!f->cfg.refine) {
         return;
     }
     for (i = 0; i < 3; ++i) {

@@ -331,6 +331,17 @@ static void test_case2_vs_particle_reference(void **state)
     print_message("95 %% intervals cover the truth: position %.3f, speed %.3f of %d steps\n", (double)cov_s / n_cov,
                   (double)cov_v / n_cov, n_cov);
     assert_true(cov_s >= 0.85 * n_cov && cov_v >= 0.85 * n_cov);
+    { /* Gamma speed noise leaves the continuous hypothesis out, but the rows
+       * keep their spread in the band (cfg.refine, the default): a declared
+       * row's theta_cov is diag(refine_spread x its coefficients)^2 */
+        hstpf_estimate_t e;
+        (void)hstpf_estimate(&fa, &e);
+        assert_true(e.declared >= 0 && e.q_offtable == 0);
+        TU_CLOSE((double)e.theta_cov[0], pow(c.refine_spread * m[e.declared].c0, 2), 1e-6 * e.theta_cov[0]);
+        TU_CLOSE((double)e.theta_cov[3], pow(c.refine_spread * m[e.declared].c1, 2), 1e-6 * e.theta_cov[3]);
+        TU_CLOSE((double)e.theta_cov[5], pow(c.refine_spread * m[e.declared].c2, 2), 1e-6 * e.theta_cov[5]);
+        assert_true(e.theta_cov[1] == 0 && e.theta_cov[2] == 0 && e.theta_cov[4] == 0);
+    }
     for (l = 0; l < 3; ++l) {
         double s1 = 0.0, s2 = 0.0, mean, se;
         int kmin = REF_STEPS;
