@@ -88,15 +88,21 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     }
     ms = s1 / tot; /* from the box's edge */
     mv = v1 / tot; /* the mass at rest counts at v = 0 */
-    for (i = 0; i < NS; ++i) {
-        const double d = ((double)i + 0.5) * (double)g[1] - ms;
-        s2 += (double)f->grid.ms[i] * d * d;
+    { /* the second pass in float (soft-float double on the M4F): about
+       * the mean, from the box's edge, nothing large cancels */
+        const real cs = (real)ms, cv = (real)(mv - (double)g[2]);
+        real a2 = 0, b2 = 0;
+        for (i = 0; i < NS; ++i) {
+            const real d = ((real)i + (real)0.5) * g[1] - cs;
+            a2 += f->grid.ms[i] * d * d;
+        }
+        for (j = 0; j < NV; ++j) {
+            const real d = ((real)j + (real)0.5) * g[3] - cv;
+            b2 += f->grid.mv[j] * d * d;
+        }
+        s2 = (double)a2;
+        v2 = (double)b2 + (tot - moving > 0.0 ? tot - moving : 0.0) * mv * mv;
     }
-    for (j = 0; j < NV; ++j) {
-        const double d = (double)g[2] + ((double)j + 0.5) * (double)g[3] - mv;
-        v2 += (double)f->grid.mv[j] * d * d;
-    }
-    v2 += (tot - moving > 0.0 ? tot - moving : 0.0) * mv * mv;
     { /* sum of squares in float, eight partial sums: a double per cell is
        * soft-float on the M4F (a quarter of its grid step) */
         real qa[8] = {0, 0, 0, 0, 0, 0, 0, 0};
