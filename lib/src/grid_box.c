@@ -243,7 +243,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     const real mid = yr - hstpf__dist_sample(&f->de, 0x80000000u); /* y less e's median */
     const real a0 = acc - m->k0;                                   /* net acceleration at rest */
     const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1;         /* < 0: the rest mass is held */
-    int i, j, any = 0;
+    int i, j, any = 0, held;
     tot = hstpf__grid_sum(p, NS * NV);
     rtot = hstpf__grid_sum(rest, NS);
     tot += rtot;
@@ -273,6 +273,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
             v_hi = vi > v_hi ? vi : v_hi;
         }
     }
+    held = !any && rest_v < (real)0; /* every occupied cell at rest and held */
     if (rtot > thr) { /* the mass at rest: no shift; it starts at rest_v if it moves */
         int a = 0, b = NS - 1;
         while (a < b && rest[a] <= thr) {
@@ -280,6 +281,25 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
         }
         while (b > a && rest[b] <= thr) {
             --b;
+        }
+        if (held) {
+            /* held: the prediction is the posterior itself (no motion, no
+             * noise), so the new box is the part of these cells the
+             * measurement leaves above the tail, at their own width; a box
+             * from the noisy prediction (the noise's range in bins, and a
+             * reach to the measurement) re-gridded a train standing still
+             * onto cells of centimetres at every fix, smearing it by a
+             * cell each time (docs/grid.md, pitfall 5) */
+            s_lo = g[0] + (real)a * g[1];
+            s_hi = g[0] + (real)(b + 1) * g[1];
+            if (has_y) {
+                memcpy(f->grid.work, rest, sizeof(real) * NS);
+                posterior_box(f, f->grid.work, NS, g[0], g[1], 0, yr, &s_lo, &s_hi);
+            }
+            hstpf__grid_geometry(s_lo, s_hi, 0, 0, ng);
+            *tot_out = tot;
+            *rtot_out = rtot;
+            return;
         }
         s_lo = g[0] + (real)a * g[1] < s_lo ? g[0] + (real)a * g[1] : s_lo;
         s_hi = g[0] + (real)(b + 1) * g[1] > s_hi ? g[0] + (real)(b + 1) * g[1] : s_hi;
