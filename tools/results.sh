@@ -104,6 +104,10 @@ done
 for s in off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
 done
+echo "== issue 13's journey: the line with stops, Case 2 noise, 17 types (the grid engine by default)"
+"$mc" --scenario stops-case2 --seeds "$gseeds" --json "$out/stops-case2.json" | tee "$out/stops-case2.txt"
+# the same journeys through the daemon (hstpfd --log, its defaults, models = all, noise = case2)
+tools/journeys_case2.sh --seeds 5 --out "$out/journeys-case2" | tee "$out/journeys-case2.txt"
 echo "== declaration rule (17 types, both engines)"
 {
   echo "engine | threshold | hold [s] | result"
