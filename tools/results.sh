@@ -106,6 +106,9 @@ for s in off15-t grade8-t; do
 done
 echo "== issue 13's journey: the line with stops, Case 2 noise, 17 types (the grid engine by default)"
 "$mc" --scenario stops-case2 --seeds "$gseeds" --json "$out/stops-case2.json" | tee "$out/stops-case2.txt"
+for s in start300-case2 clock+30-case2 clock-30-case2 outage-case2; do
+  "$mc" --scenario "$s" --seeds 20 --json "$out/$s.json" | tee "$out/$s.txt"
+done
 # the same journeys through the daemon (hstpfd --log, its defaults, models = all, noise = case2)
 tools/journeys_case2.sh --seeds 5 --out "$out/journeys-case2" | tee "$out/journeys-case2.txt"
 echo "== declaration rule (17 types, both engines)"

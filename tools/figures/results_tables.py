@@ -10,7 +10,8 @@ import re
 import sys
 from pathlib import Path
 
-JOURNEYS = ["stops", "day", "start300", "clock+30", "clock-30", "outage", "gain5", "stops-case2"]
+JOURNEYS = ["stops", "day", "start300", "clock+30", "clock-30", "outage", "gain5", "stops-case2", "start300-case2",
+            "clock+30-case2", "clock-30-case2", "outage-case2"]
 OFFTABLE = ["off10", "off15", "off20", "grade8", "mass10", "mass20", "absent", "gain-5", "gain5"]
 # the same questions on the grid engine, with Student-t position noise (stops-t: a row)
 OFFTABLE_T = ["stops-t", "off15-t", "grade8-t"]

@@ -625,8 +625,13 @@ static const scenario_t scenarios[] = {
     {"stops-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
     {"off15-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
     {"grade8-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
-    /* the line with Case 2's Gamma noise, 17 types: issue 13's daemon journey */
+    /* the line with Case 2's Gamma noise, 17 types: issue 13's daemon journey;
+     * then the start at speed, the clock steps and the outage under it */
     {"stops-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"start300-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"clock+30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"clock-30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"outage-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0},
 };
 
 /* Journey table: one row per truth and a total (docs/results.md). */
