@@ -471,6 +471,19 @@ static void test_validity_json_and_frames(void **state)
 #endif
     }
 
+    /* an sd below the signal's 0.01 goes out as 0.01, one between steps as
+     * the next step up (rounded to nearest, Case 2's millimetres read 0) */
+    v_estimate();
+    v_core.est.position_sd_m = 0.0007;
+    v_core.est.speed_sd_mps = 0.0149f;
+    v_publish(out, fr, line, sizeof line, 1, &fs, &fo);
+    {
+        struct hstpf_can_est_quality_t q;
+        assert_int_equal(hstpf_can_est_quality_unpack(&q, v_quality.data, v_quality.len), 0);
+        assert_int_equal(q.position_sd, 1u);
+        assert_int_equal(q.speed_sd, 2u);
+    }
+
     /* sd not finite / beyond EstQuality's range (10485.75 m) */
     v_estimate();
     v_core.est.speed_sd_mps = 0.0f / 0.0f;
@@ -568,14 +581,14 @@ static void test_validity_json_and_frames(void **state)
     {
         /* {c2's variance, fit} -> {valid, fault, WSd0..4, OffWhat}. c2's variance 1e-6: sd
          * 1e-3 V^2, 30.6 N/kN at 175 km/h, clipped and flagged; at 87.5 km/h
-         * sqrt(0.04 + 7.656^2) = 7.659 (153 counts). A NaN covariance: not valid, flagged, 0.
+         * sqrt(0.04 + 7.656^2) = 7.659 (153.2 counts, rounded up: 154). A NaN covariance: not valid, flagged, 0.
          * OffWhat only with no type fitting. */
         static const struct {
             float c2c2;
             uint8_t fit;
             unsigned valid, fault, sd[5], off;
         } cases[3] = {{0.0f, HSTPF_FIT_NONE, 1, 0, {4, 4, 4, 4, 4}, 3},
-                      {1e-6f, HSTPF_FIT_TABLE, 0, 1, {4, 153, 511, 511, 511}, 0},
+                      {1e-6f, HSTPF_FIT_TABLE, 0, 1, {4, 154, 511, 511, 511}, 0},
                       {NAN, HSTPF_FIT_TABLE, 0, 1, {0, 0, 0, 0, 0}, 0}};
         int k;
         for (k = 0; k < 3; ++k) {
