@@ -282,7 +282,12 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
         while (b > a && rest[b] <= thr) {
             --b;
         }
-        if (held) {
+        s_lo = g[0] + (real)a * g[1] < s_lo ? g[0] + (real)a * g[1] : s_lo;
+        s_hi = g[0] + (real)(b + 1) * g[1] > s_hi ? g[0] + (real)(b + 1) * g[1] : s_hi;
+        v_lo = rest_v > (real)0 && rest_v < v_lo ? rest_v : (v_lo < (real)3e38 ? v_lo : (real)0);
+        v_hi = rest_v > v_hi ? rest_v : (v_hi > (real)-3e38 ? v_hi : (real)0);
+        any = 1;
+        if (held && has_y) {
             /* held: the prediction is the posterior itself (no motion, no
              * noise), so the new box is the part of these cells the
              * measurement leaves above the tail, at their own width; a box
@@ -290,33 +295,20 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
              * reach to the measurement) re-gridded a train standing still
              * onto cells of centimetres at every fix, smearing it by a
              * cell each time (docs/grid.md, pitfall 5) */
-            s_lo = g[0] + (real)a * g[1];
-            s_hi = g[0] + (real)(b + 1) * g[1];
-            if (has_y) {
-                memcpy(f->grid.work, rest, sizeof(real) * NS);
-                posterior_box(f, f->grid.work, NS, g[0], g[1], 0, yr, &s_lo, &s_hi);
-            }
-            hstpf__grid_geometry(s_lo, s_hi, 0, 0, ng);
-            *tot_out = tot;
-            *rtot_out = rtot;
-            return;
+            memcpy(f->grid.work, rest, sizeof(real) * NS);
+            posterior_box(f, f->grid.work, NS, g[0], g[1], 0, yr, &s_lo, &s_hi);
         }
-        s_lo = g[0] + (real)a * g[1] < s_lo ? g[0] + (real)a * g[1] : s_lo;
-        s_hi = g[0] + (real)(b + 1) * g[1] > s_hi ? g[0] + (real)(b + 1) * g[1] : s_hi;
-        v_lo = rest_v > (real)0 && rest_v < v_lo ? rest_v : (v_lo < (real)3e38 ? v_lo : (real)0);
-        v_hi = rest_v > v_hi ? rest_v : (v_hi > (real)-3e38 ? v_hi : (real)0);
-        any = 1;
     }
     if (!any) { /* cannot happen (normalised mass); keep the old box */
         s_lo = g[0];
         s_hi = g[0] + (real)NS * g[1];
         v_lo = g[2];
         v_hi = g[2] + (real)NV * g[3];
-    } else {
+    } else if (!held) {
         predicted_box(f, l, dt, scale, tot, has_y, yr, mid, rtot > (real)0 ? rest_v : (real)-1, &s_lo, &s_hi, &v_lo,
                       &v_hi);
     }
-    if (has_y) {
+    if (has_y && !held) {
         /* a measurement whose middle lies beyond the predicted box pulls
          * the posterior out of it: the box reaches to the measurement's
          * 1 %..99 % range, or the model could never catch up */

@@ -133,7 +133,7 @@ static double count(uint32_t n)
 /* A standard deviation goes out rounded up to its signal's resolution
  * (the codec rounds to nearest): the grid engine's Case 2 posteriors are
  * millimetres wide, and PositionSd's 0.01 m would have said 0, an interval
- * the truth is never in. */
+ * the truth is never in. The resolution is one count, decoded. */
 static double sd_up(double sd, double resolution)
 {
     return sd > 0.0 && isfinite(sd) ? ceil(sd / resolution - 1e-6) * resolution : sd;
@@ -209,8 +209,10 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         m.qual_valid = (uint8_t)(v->have_fix && v->valid && v->sd_valid && ok);
         m.qual_fault = (uint8_t)(v->have_fix && !ok);
         m.standstill = v->standstill ? 1u : 0u;
-        m.position_sd = hstpf_frames_est_quality_position_sd_raw(v->have_fix ? sd_up(v->position_sd_m, 0.01) : 0.0);
-        m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(v->have_fix ? sd_up(v->speed_sd_mps, 0.01) : 0.0);
+        m.position_sd = hstpf_frames_est_quality_position_sd_raw(
+            v->have_fix ? sd_up(v->position_sd_m, hstpf_can_est_quality_position_sd_decode(1u)) : 0.0);
+        m.speed_sd = hstpf_frames_est_quality_speed_sd_raw(
+            v->have_fix ? sd_up(v->speed_sd_mps, hstpf_can_est_quality_speed_sd_decode(1u)) : 0.0);
         m.est_time_valid = v->est_time_valid ? 1u : 0u;
         m.est_time = (uint16_t)(v->est_time_valid ? v->est_time_ms % HSTPF_FIX_TIME_WRAP_MS : 0u);
         n = hstpf_can_est_quality_pack(f->data, &m, 8u);
@@ -224,7 +226,8 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         for (k = 0; k < HSTPFD_BAND_N; ++k) {
             const double sd = v->w_sd[k];
             ok = ok && hstpf_can_est_band_w_sd0_is_in_phys_range(sd); /* one scale for all five */
-            raw[k] = hstpf_frames_est_band_w_sd0_raw(v->have_fix && isfinite(sd) ? sd_up(sd, 0.05) : 0.0);
+            raw[k] = hstpf_frames_est_band_w_sd0_raw(
+                v->have_fix && isfinite(sd) ? sd_up(sd, hstpf_can_est_band_w_sd0_decode(1u)) : 0.0);
         }
         (void)hstpf_can_est_band_init(&m);
         m.band_valid = (uint8_t)(v->have_fix && v->valid && v->sd_valid && ok);
