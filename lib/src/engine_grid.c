@@ -140,23 +140,16 @@ static real mass_of(const hstpf_t *f, uint16_t l)
 {
     return hstpf__grid_sum(f->grid.p[l], NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS);
 }
-/* Whether model l holds any mass (the sum of non-negative cells is > 0;
- * four partial sums: only the sign is used). */
-static int has_mass(const hstpf_t *f, uint16_t l)
-{
-    const real *p = f->grid.p[l], *rest = f->grid.rest[l];
-    return hstpf__grid_sum(p, NS * NV) + hstpf__grid_sum(rest, NS) > (real)0;
-}
 
-
-/* Predict (and measure) one model with the box tail f->grid.tail. */
-static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
+/* Predict (and measure) one model with the box tail f->grid.tail; returns
+ * whether it holds any mass. */
+static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
 {
     const uint16_t l = (uint16_t)(m - f->m);
     const real dt = (real)st->dt, scale = (real)st->scale;
     real ng[4], tot, rtot, held;
     real *p = f->grid.p[l], *g = f->grid.geom[l];
-    int i;
+    int i, has_mass;
     hstpf__grid_new_box(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng, &tot, &rtot);
     held = hstpf__grid_transport(f, m, l, dt, acc, ng, tot, rtot);
     hstpf__grid_diffuse(f, l, scale, ng);
@@ -170,8 +163,10 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
     f->grid.pred_mass[l] = tot;
     m->loglik = 0;
     if (st->has_y) {
-        m->loglik = hstpf__grid_measure(f, m, l, (real)st->yr);
-    } else if (tot > (real)0) {
+        m->loglik = hstpf__grid_measure(f, m, l, (real)st->yr, &has_mass);
+        return has_mass;
+    }
+    if (tot > (real)0) { /* its largest cell >= 1 / (cells) after the scaling */
         const real inv = (real)1 / tot;
         for (i = 0; i < NS * NV; ++i) {
             p[i] *= inv;
@@ -179,7 +174,9 @@ static void model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, re
         for (i = 0; i < NS; ++i) {
             f->grid.rest[l][i] *= inv;
         }
+        return 1;
     }
+    return 0;
 }
 
 /* One model's step. A model that was tracking and now misses the
@@ -197,6 +194,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     const uint32_t hits = m->floor_hits;
     const real v_was = m->v_mean;
     real acc = (real)st->xu;
+    int has_mass;
     if (f->cfg.n_track > 0u) {
         acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
     }
@@ -206,17 +204,17 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         memcpy(f->grid.save + NS * NV + NS, f->grid.geom[l], sizeof f->grid.geom[l]);
     }
     f->grid.tail = GRID_TAIL;
-    model_pass(f, m, st, acc);
-    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !has_mass(f, l))) {
+    has_mass = model_pass(f, m, st, acc);
+    if (st->has_y && ((run == 0u && m->floor_run > 0u) || !has_mass)) {
         memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
         memcpy(f->grid.rest[l], f->grid.save + NS * NV, sizeof f->grid.rest[l]);
         memcpy(f->grid.geom[l], f->grid.save + NS * NV + NS, sizeof f->grid.geom[l]);
         m->floor_run = run;
         m->floor_hits = hits;
         f->grid.tail = WIDE_TAIL;
-        model_pass(f, m, st, acc);
+        has_mass = model_pass(f, m, st, acc);
     }
-    if (!has_mass(f, l)) {
+    if (!has_mass) {
         hstpf__acq_t q;
         memset(&q, 0, sizeof q);
         q.y2 = st->has_y ? st->yr : (double)m->s_mean;

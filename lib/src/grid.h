@@ -108,8 +108,9 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng);
 /* ---- grid_measure.c: step 4 -------------------------------------------- */
 
 /* Model l weighted by the measurement yr and normalised; returns the
- * log-likelihood increment and counts the floor hits of m. */
-real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr);
+ * log-likelihood increment, whether any cell holds mass in *has_mass, and
+ * counts the floor hits of m. */
+real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int *has_mass);
 
 /* ---- engine_grid.c ----------------------------------------------------- */
 

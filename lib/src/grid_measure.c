@@ -4,8 +4,11 @@
 
 #include "grid.h"
 
-/* Step 4: the measurement update; returns the log-likelihood increment. */
-real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
+/* Step 4: the measurement update; returns the log-likelihood increment,
+ * and in *has_mass whether any cell holds mass after it (the sum of
+ * non-negative cells is > 0 whatever their order: the caller need not sum
+ * them again). */
+real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int *has_mass)
 {
     const hstpf_dist_t *de = &f->de;
     real *p = f->grid.p[l], *g = f->grid.geom[l], *ll = f->grid.row;
@@ -47,7 +50,8 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr)
         f->grid.rest[l][i] *= ll[i];
         sum += f->grid.rest[l][i];
     }
-    if (!(sum > (real)0)) { /* every cell underflowed: keep the prediction */
+    *has_mass = sum > (real)0; /* after the scaling too: its largest cell >= 1 / (cells) */
+    if (!*has_mass) { /* every cell underflowed: keep the prediction */
         return lmax;
     }
     inv = (real)1 / sum;
