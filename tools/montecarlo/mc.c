@@ -332,6 +332,9 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         for (k = 0; k < w->n_models; ++k) {
             fprintf(trace, ",q%d", k);
         }
+        for (k = 0; k < w->n_models; ++k) { /* each model's log-likelihood increment of the step */
+            fprintf(trace, ",ll%d", k);
+        }
         fprintf(trace, "\n");
     }
     while (sim.t <= w->sc->duration_s) {
@@ -437,12 +440,17 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             r->t_declare = -1.0;
         }
         if (trace) {
-            fprintf(trace, "%.0f,%.3f,%.4f,%.4f,%.3f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d,%d,%d,%d,%.3f,%.4f", smp.t,
+            /* the truth, inputs and fixes to a micrometre: a one-sided noise's
+             * density changes within a millimetre (tools/figures/oracle_case2.py) */
+            fprintf(trace, "%.0f,%.6f,%.6f,%.6f,%.6f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d,%d,%d,%d,%.3f,%.4f", smp.t,
                     smp.s, smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
                     (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared,
                     (int)est.status, est.standstill, est.valid, est.position_sd_m, (double)est.speed_sd_mps);
             for (k = 0; k < w->n_models; ++k) {
                 fprintf(trace, ",%.6g", (double)est.model[k].q);
+            }
+            for (k = 0; k < w->n_models; ++k) {
+                fprintf(trace, ",%.9g", (double)est.model[k].loglik);
             }
             fprintf(trace, "\n");
         }
