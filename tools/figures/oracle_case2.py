@@ -34,6 +34,7 @@ MODELS = ("CRH1", "CRH3", "CRH5")  # paper Case 2's bank; the truth is CRH3
 TRUE = 1
 Q_FLOOR = 1e-9  # the library's default cfg.q_floor
 THR = 0.9       # hstpf-mc's success threshold
+TIMES = (12, 100, 150)  # the log-ratios compared: the start, and around the decisions
 
 
 def gamma_logpdf(x, shape, scale):
@@ -103,7 +104,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     rows_out = []
     with tempfile.TemporaryDirectory() as tmp:
-        print("seed  grid  exact  lr(CRH3:CRH5) at 100 s grid / exact  at 150 s grid / exact")
+        print("seed  grid  exact  lr(CRH3:CRH5) at 12 s grid / exact  at 100 s  at 150 s")
         for seed in range(a.first_seed, a.first_seed + a.seeds):
             rows = trace(a.mc, seed, os.path.join(tmp, "t.csv"))[: a.steps]
             y = np.array([float(r["y"]) for r in rows])
@@ -118,11 +119,10 @@ def main(argv=None):
                 ref = np.array([particle_loglik(y, u, m, a.particles, a.prior, rng) for m in MODELS])
                 cr = np.cumsum(ref, 1)
                 tr = t_cross(ref)
-                lr = [(cg[TRUE, t] - cg[2, t], cr[TRUE, t] - cr[2, t]) for t in (100, 150)]
+                lr = [(cg[TRUE, t] - cg[2, t], cr[TRUE, t] - cr[2, t]) for t in TIMES]
                 rows_out.append((tg, tr, lr))
-                pooled.append([[cr[i, t] for t in (100, 150)] for i in range(len(MODELS))])
-                print("%4d  %4d  %5d  %8.2f / %6.2f  %8.2f / %6.2f" % (seed, tg, tr, lr[0][0], lr[0][1], lr[1][0],
-                                                                       lr[1][1]), flush=True)
+                pooled.append([[cr[i, t] for t in TIMES] for i in range(len(MODELS))])
+                print("%4d  %4d  %5d  " % (seed, tg, tr) + "  ".join("%6.2f / %6.2f" % x for x in lr), flush=True)
             if a.repeats > 1:
                 # the likelihood's estimate is unbiased, its log is not (it is low by about half its
                 # relative variance, more for a model few particles fit): the mean of the repeats'
@@ -130,10 +130,10 @@ def main(argv=None):
                 c = np.array(pooled)  # repeats x models x times
                 m = c.max(0)
                 lme = m + np.log(np.mean(np.exp(c - m), 0))
-                print("      pooled over %d repeats (log of the mean likelihood): lr at 100 s %.2f, at 150 s %.2f; "
-                      "mean of the logs %.2f, %.2f" % (a.repeats, lme[TRUE, 0] - lme[2, 0], lme[TRUE, 1] - lme[2, 1],
-                                                     c[:, TRUE, 0].mean() - c[:, 2, 0].mean(),
-                                                     c[:, TRUE, 1].mean() - c[:, 2, 1].mean()), flush=True)
+                print("      pooled over %d repeats (log of the mean likelihood): lr %s; mean of the logs %s"
+                      % (a.repeats, " ".join("%.2f" % (lme[TRUE, j] - lme[2, j]) for j in range(len(TIMES))),
+                         " ".join("%.2f" % (c[:, TRUE, j].mean() - c[:, 2, j].mean()) for j in range(len(TIMES)))),
+                      flush=True)
     tg = np.array([r[0] for r in rows_out], float)
     tr = np.array([r[1] for r in rows_out], float)
     d = tr - tg
@@ -141,7 +141,7 @@ def main(argv=None):
           "the exact sooner in %d of %d, by 30 s in %d" % (np.median(tg), np.median(tr), d.mean(),
                                                           d.std() / math.sqrt(len(d)), int((d < 0).sum()), len(d),
                                                           int((tr <= 30).sum())))
-    for j, t in enumerate((100, 150)):
+    for j, t in enumerate(TIMES):
         fin = np.array([np.isfinite(r[2][j][1]) for r in rows_out])
         gl = np.array([r[2][j][0] for r in rows_out])
         rl = np.array([r[2][j][1] for r in rows_out])
