@@ -102,6 +102,8 @@ def main(argv=None):
                     help="runs of the particle filter per seed, each with its own random stream: the spread "
                          "between them is the reference's own Monte Carlo noise")
     a = ap.parse_args(argv)
+    if a.steps <= max(TIMES):
+        ap.error("--steps must exceed %d (the last log-ratio compared)" % max(TIMES))
     rows_out = []
     with tempfile.TemporaryDirectory() as tmp:
         print("seed  grid  exact  lr(CRH3:CRH5) at 12 s grid / exact  at 100 s  at 150 s")
