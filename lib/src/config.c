@@ -42,6 +42,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->refine_prior_q = 0.01;
     cfg->refine_spread = 0.3; /* docs/model.md, "Prior" */
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
+    cfg->grid_speed_lattice = 0; /* until its reruns: docs/grid.md */
     return HSTPF_OK;
 }
 
@@ -157,6 +158,9 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     }
     if (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) {
         return fail(field, "weight_method", HSTPF_E_CONFIG);
+    }
+    if (c->grid_speed_lattice > 1u) {
+        return fail(field, "grid_speed_lattice", HSTPF_E_CONFIG);
     }
     if (c->refine > 1u) {
         return fail(field, "refine", HSTPF_E_CONFIG);

@@ -225,6 +225,44 @@ void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g)
     g[3] = (v_hi - v_lo) / (real)NV;
 }
 
+/* The speed cells of ng moved onto the lattice of the old cells' images
+ * under the model's map (vimg, from the first occupied row): their width
+ * the images' times 2^k, the smallest that holds ng's speed range with a
+ * cell to spare, and the origin on that lattice. The transport then moves
+ * each row onto whole cells (halves or pairs), instead of sharing it
+ * between two at every step: that smear, about a cell per step, washed
+ * out the 1 mm/s per step by which CRH3 and CRH5 differ at the start of
+ * paper Case 2 (docs/grid.md, "Where paper Case 2's seconds go"). Left as
+ * it is when no row is occupied, when the cells would be narrower than
+ * DV_MIN, or when the lattice's box would start below 0. */
+static void speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng)
+{
+    const real need = ng[3] * (real)NV;
+    int j, k;
+    for (j = 0; j < NV && first[j] > last[j]; ++j) {
+    }
+    if (j == NV) {
+        return;
+    }
+    {
+        const real a = vimg[j];
+        real h = vimg[j + 1] - vimg[j];
+        for (k = 0; k < 16 && h > (real)0 && (real)(NV - 1) * h < need; ++k) {
+            h *= (real)2;
+        }
+        for (k = 0; k < 16 && (real)(NV - 1) * h * (real)0.5 >= need; ++k) {
+            h *= (real)0.5;
+        }
+        if (h >= DV_MIN && (real)(NV - 1) * h >= need) {
+            const real v0 = a + (real)floor((double)((ng[2] - a) / h)) * h;
+            if (v0 >= (real)0 && v0 + (real)NV * h >= ng[2] + need) {
+                ng[2] = v0;
+                ng[3] = h;
+            }
+        }
+    }
+}
+
 /* Step 1: the new box from the transported support plus the noise
  * quantiles, into ng (s0, ds, v0, dv); sets f->grid.first/last (the
  * occupied cells of each row) and vimg for the transport. A cell is
@@ -320,6 +358,9 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     }
     v_lo = v_lo > (real)0 ? v_lo : (real)0; /* a train never reverses: the box starts at 0 at most */
     hstpf__grid_geometry(s_lo, s_hi, v_lo, v_hi, ng);
+    if (f->cfg.grid_speed_lattice && !held) {
+        speed_lattice(first, last, vimg, ng);
+    }
     *tot_out = tot;
     *rtot_out = rtot;
 }

@@ -135,6 +135,10 @@ static void test_refusals(void **state)
     assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_CONFIG);
     assert_string_equal(field, "refine");
     c.refine = 1;
+    c.grid_speed_lattice = 2;
+    assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_CONFIG);
+    assert_string_equal(field, "grid_speed_lattice");
+    c.grid_speed_lattice = 0;
     seg[0].start_m = 0.0;
     seg[0].gradient_permille = 0.0;
     seg[0].curve_radius_m = 2e7; /* header: 0 = straight, else >= 100; the table's top is 1e7 */

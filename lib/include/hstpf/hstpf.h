@@ -278,6 +278,14 @@ typedef struct {
      *  20 min of cruise in a paper Case 1 run, pulling the hypothesis'
      *  weight up with it). */
     double refine_gain_sd;
+    /** Grid engine, 1: each model's speed cells are the image of its last
+     *  ones under its own dynamics (their width doubled or halved until
+     *  the predicted box fits; a start below 0 keeps the box), so the
+     *  speed axis is not remapped at every step; 0: the speed box at the
+     *  predicted marginal's quantiles, remapped (0; experimental, not yet
+     *  the default: docs/grid.md, "Where paper Case 2's seconds go",
+     *  measures both). Other engines ignore it. */
+    uint8_t grid_speed_lattice;
     /** Caller-owned memory for the engine in use: the particles or the
      *  grid cells, which hstpf_t does not hold. At least
      *  hstpf_workspace_size() bytes (HSTPF_PARTICLE_WS_BYTES,
