@@ -113,6 +113,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.models = models;
     cfg.n_particles = (uint16_t)(fuzz_u8(&in) % 40u); /* 0, 1 refused; small keeps runs fast */
     cfg.seed = fuzz_u64(&in);
+    /* from the seed's bits, so the corpus reads as before: off, on, refused */
+    cfg.grid_speed_lattice = (uint8_t)((cfg.seed >> 7) % 3u);
     {
         const uint8_t e = fuzz_u8(&in);
         cfg.engine = (hstpf_engine_t)(e % 4u);
