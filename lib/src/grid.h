@@ -22,6 +22,7 @@ typedef hstpf_real_t real;
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */
 #define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
+#define LATTICE_COARSEST ((real)1.5) /* cfg.grid_speed_lattice: widest cells, x the box's own */
 
 /* The deterministic speed after one step (below 0: the train comes to
  * rest within the step; the caller moves that mass to rest). */

@@ -233,8 +233,11 @@ void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g)
  * between two at every step: that smear, about a cell per step, washed
  * out the 1 mm/s per step by which CRH3 and CRH5 differ at the start of
  * paper Case 2 (docs/grid.md, "Where paper Case 2's seconds go"). Left as
- * it is when no row is occupied, when the cells would be narrower than
- * DV_MIN, or when the lattice's box would start below 0. */
+ * it is (a remap, this step) when no row is occupied, when the cells would
+ * be narrower than DV_MIN or coarser than LATTICE_COARSEST times the box's
+ * own (the lattice's cells are up to twice as wide: resolution traded for
+ * the smear, and uncapped it once declared CRH5 for 40 s on paper Case 2,
+ * seed 1766), or when the lattice's box would start below 0. */
 static void speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng)
 {
     const real need = ng[3] * (real)NV;
@@ -253,7 +256,7 @@ static void speed_lattice(const int16_t *first, const int16_t *last, const real 
         for (k = 0; k < 16 && (real)(NV - 1) * h * (real)0.5 >= need; ++k) {
             h *= (real)0.5;
         }
-        if (h >= DV_MIN && (real)(NV - 1) * h >= need) {
+        if (h >= DV_MIN && (real)(NV - 1) * h >= need && h <= LATTICE_COARSEST * ng[3]) {
             const real v0 = a + (real)floor((double)((ng[2] - a) / h)) * h;
             if (v0 >= (real)0 && v0 + (real)NV * h >= ng[2] + need) {
                 ng[2] = v0;

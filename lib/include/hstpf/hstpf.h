@@ -280,8 +280,9 @@ typedef struct {
     double refine_gain_sd;
     /** Grid engine, 1: each model's speed cells are the image of its last
      *  ones under its own dynamics (their width doubled or halved until
-     *  the predicted box fits; a start below 0 keeps the box), so the
-     *  speed axis is not remapped at every step; 0: the speed box at the
+     *  the predicted box fits; a box at its quantiles instead, remapped,
+     *  where those cells would be over 1.5 times its own or start below
+     *  0), so the speed axis is seldom remapped; 0: the speed box at the
      *  predicted marginal's quantiles, remapped (0; experimental, not yet
      *  the default: docs/grid.md, "Where paper Case 2's seconds go",
      *  measures both). Other engines ignore it. */
