@@ -4,7 +4,7 @@
 # why), not an accident. Each is the value measured when it was set plus a
 # margin of about 10 % (docs/footprint.md has the measurements).
 
-# libhstpf.a flash (code + rodata + data, all objects), bytes; 61 032 measured (59 544 when set)
+# libhstpf.a flash (code + rodata + data, all objects), bytes; 61 444 measured (59 544 when set)
 set(HSTPF_BUDGET_FLASH 64000)
 # libhstpf.a static RAM (data + bss), bytes: the library keeps no state
 set(HSTPF_BUDGET_LIB_RAM 0)
