@@ -190,8 +190,11 @@ static void test_gaussian_vs_kalman_lattice(void **state)
  * computed here from the old geometry: the new origin is the image of an
  * old edge (or of the half or a multiple of the images' spacing) to 2 %
  * of a cell, and the new width is the images' width times a power of two
- * (the map's slope varies by 1e-5 across a box: to 1e-3). Mass and sign
- * as everywhere (check_cells). */
+ * (the map's slope varies by 1e-5 across a box; the images are floats near
+ * 56 m/s, each rounded by 4e-6: to 1e-5 plus four roundings over the
+ * width). Where the new cells are not on it, the lattice's would have been
+ * coarser than 1.5 x the box's own (LATTICE_COARSEST). Mass and sign as
+ * everywhere (check_cells). */
 static void test_speed_lattice(void **state)
 {
     hstpf_sim_config_t sc;
