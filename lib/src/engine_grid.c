@@ -166,7 +166,7 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         m->loglik = hstpf__grid_measure(f, m, l, (real)st->yr, &has_mass);
         return has_mass;
     }
-    if (tot > (real)0) { /* its largest cell >= 1 / (cells) after the scaling */
+    if (tot > (real)0) {
         const real inv = (real)1 / tot;
         for (i = 0; i < NS * NV; ++i) {
             p[i] *= inv;
@@ -174,7 +174,8 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         for (i = 0; i < NS; ++i) {
             f->grid.rest[l][i] *= inv;
         }
-        return 1;
+        /* its largest cell is then >= 1 / (cells), unless 1 / tot overflowed */
+        return inv - inv == (real)0 || mass_of(f, l) > (real)0;
     }
     return 0;
 }

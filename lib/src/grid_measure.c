@@ -50,7 +50,7 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
         f->grid.rest[l][i] *= ll[i];
         sum += f->grid.rest[l][i];
     }
-    *has_mass = sum > (real)0; /* after the scaling too: its largest cell >= 1 / (cells) */
+    *has_mass = sum > (real)0;
     if (!*has_mass) { /* every cell underflowed: keep the prediction */
         return lmax;
     }
@@ -60,6 +60,9 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
     }
     for (i = 0; i < NS; ++i) {
         f->grid.rest[l][i] *= inv;
+    }
+    if (!(inv - inv == (real)0)) { /* else its largest cell is >= 1 / (cells) */
+        *has_mass = hstpf__grid_sum(p, NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS) > (real)0;
     }
     return lmax + (real)log((double)sum);
 }
