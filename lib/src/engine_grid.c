@@ -174,10 +174,8 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         for (i = 0; i < NS; ++i) {
             f->grid.rest[l][i] *= inv;
         }
-        /* its largest cell is then >= 1 / (cells), unless 1 / tot overflowed */
-        return inv - inv == (real)0 || mass_of(f, l) > (real)0;
     }
-    return 0;
+    return mass_of(f, l) > (real)0; /* a step without a fix (seldom): summed again */
 }
 
 /* One model's step. A model that was tracking and now misses the

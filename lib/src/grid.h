@@ -86,6 +86,10 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
 void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g);
 void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt, real acc, real scale, int has_y,
                          real yr, real *ng, real *tot, real *rtot);
+/* cfg.grid_speed_lattice: ng's speed cells moved onto the lattice of the
+ * old rows' images vimg (rows first[j] <= last[j] occupied), or left. */
+void hstpf__grid_speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng);
+
 
 /* ---- grid_transport.c: step 2 ------------------------------------------ */
 

@@ -238,7 +238,7 @@ void hstpf__grid_geometry(real s_lo, real s_hi, real v_lo, real v_hi, real *g)
  * own (the lattice's cells are up to twice as wide: resolution traded for
  * the smear, and uncapped it once declared CRH5 for 40 s on paper Case 2,
  * seed 1766), or when the lattice's box would start below 0. */
-static void speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng)
+void hstpf__grid_speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng)
 {
     const real need = ng[3] * (real)NV;
     int j, k;
@@ -362,7 +362,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     v_lo = v_lo > (real)0 ? v_lo : (real)0; /* a train never reverses: the box starts at 0 at most */
     hstpf__grid_geometry(s_lo, s_hi, v_lo, v_hi, ng);
     if (f->cfg.grid_speed_lattice && !held) {
-        speed_lattice(first, last, vimg, ng);
+        hstpf__grid_speed_lattice(first, last, vimg, ng);
     }
     *tot_out = tot;
     *rtot_out = rtot;

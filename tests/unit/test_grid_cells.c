@@ -20,7 +20,11 @@
  *   round-off is of that order): mean, variance (with each cell's width^2
  *   / 12) and the mass at rest counted at v = 0, derived by hand. The
  *   one-pass s2 - s1^2 about the origin gave a variance of 0 here.
+ * - The speed lattice (cfg.grid_speed_lattice) on hand-made images: the
+ *   width doubled, kept or halved and the origin on the lattice, derived by
+ *   hand; ng left as it is in each of the cases the lattice does not apply.
  */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -162,6 +166,58 @@ static void test_cdf_tails(void **state)
     }
 }
 
+/* The speed lattice (cfg.grid_speed_lattice) on hand-made images: rows
+ * 5..14 occupied, their images from a at a spacing w; the box ng asks for
+ * dv cells from v0. Derived by hand: the lattice width is w 2^k, the
+ * smallest with 71 cells >= 72 dv (the box's range), kept only if at most
+ * 1.5 dv, with the origin a + floor((v0 - a) / h) h; else ng is left. */
+static void lattice_case(double a, double w, double v0, double dv, int any, double want_v0, double want_h)
+{
+    int16_t first[HSTPF_GRID_NV], last[HSTPF_GRID_NV];
+    hstpf_real_t vimg[HSTPF_GRID_NV + 1], ng[4];
+    int j;
+    for (j = 0; j < HSTPF_GRID_NV; ++j) {
+        const int occ = any && j >= 5 && j < 15;
+        first[j] = (int16_t)(occ ? 0 : HSTPF_GRID_NS);
+        last[j] = (int16_t)(occ ? HSTPF_GRID_NS - 1 : -1);
+    }
+    for (j = 0; j <= HSTPF_GRID_NV; ++j) {
+        vimg[j] = (hstpf_real_t)(a + (double)(j - 5) * w);
+    }
+    ng[0] = 100;
+    ng[1] = (hstpf_real_t)0.01;
+    ng[2] = (hstpf_real_t)v0;
+    ng[3] = (hstpf_real_t)dv;
+    hstpf__grid_speed_lattice(first, last, vimg, ng);
+    assert_true(ng[0] == 100 && ng[1] == (hstpf_real_t)0.01); /* position untouched */
+    { /* the images are hstpf_real_t near a: a width between two is off by two roundings */
+        const double tol = 4.0 * (fabs(a) + 1.0) * (sizeof(hstpf_real_t) == 4 ? FLT_EPSILON : DBL_EPSILON);
+        TU_CLOSE((double)ng[2], want_v0, 40.0 * tol + 1e-6);
+        TU_CLOSE((double)ng[3], want_h, tol);
+    }
+}
+
+static void test_speed_lattice_by_hand(void **state)
+{
+    (void)state;
+    /* w 0.01, dv 0.008: 71 x 0.01 = 0.71 >= 0.576, and not 0.355; 0.01 <= 0.012;
+     * origin 10 + floor(23.45) 0.01 */
+    lattice_case(10.0, 0.01, 10.2345, 0.008, 1, 10.23, 0.01);
+    /* w 0.004, dv 0.006: doubled once (0.284 < 0.432 <= 0.568); 0.008 <= 0.009 */
+    lattice_case(10.0, 0.004, 10.2345, 0.006, 1, 10.0 + 29.0 * 0.008, 0.008);
+    /* w 0.02, dv 0.0075: halved once (0.71 >= 0.54, 0.355 < 0.54); 0.01 <= 0.01125 */
+    lattice_case(10.0, 0.02, 10.2345, 0.0075, 1, 10.23, 0.01);
+    /* left as they are: */
+    lattice_case(10.0, 0.01, 10.2345, 0.005, 1, 10.2345, 0.005);   /* 0.01 > 1.5 x 0.005 */
+    lattice_case(10.0, 0.01, 10.2345, 0.008, 0, 10.2345, 0.008);   /* no row occupied */
+    lattice_case(0.005, 0.01, 0.0, 0.008, 1, 0.0, 0.008);          /* the origin -0.005 < 0 */
+    lattice_case(10.0, 2e-5, 10.0, 2e-5, 1, 10.0, 2e-5);           /* 4e-5 < DV_MIN */
+    lattice_case(10.0, 0.0, 10.2345, 0.008, 1, 10.2345, 0.008);    /* images of width 0 */
+    lattice_case(10.0, 1e-9, 10.2345, 0.008, 1, 10.2345, 0.008);   /* 16 doublings fall short of DV_MIN */
+    lattice_case(10.0, 1e-6, 10.2345, 0.1, 1, 10.2345, 0.1);       /* of the range: 71 x 0.066 < 7.2 */
+    lattice_case(10.0, 1.0, 10.2345, 1e-6, 1, 10.2345, 1e-6);      /* 16 halvings: 1.5e-5 < DV_MIN */
+}
+
 static hstpf_t gf; /* static, as on a target */
 
 static void test_moments_by_hand(void **state)
@@ -219,6 +275,7 @@ int main(void)
         cmocka_unit_test(test_remap_reference),
         cmocka_unit_test(test_cdf_tails),
         cmocka_unit_test(test_moments_by_hand),
+        cmocka_unit_test(test_speed_lattice_by_hand),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
