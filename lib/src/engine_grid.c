@@ -136,11 +136,6 @@ static void place_all(hstpf_t *f, const hstpf__acq_t *q)
     }
 }
 
-static real mass_of(const hstpf_t *f, uint16_t l)
-{
-    return hstpf__grid_sum(f->grid.p[l], NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS);
-}
-
 /* Predict (and measure) one model with the box tail f->grid.tail; returns
  * whether it holds any mass. */
 static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
@@ -159,7 +154,7 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
     g[3] = ng[3];
     /* the whole posterior at rest: held, or come to rest within the step */
     m->held = (uint8_t)(held >= (real)(1.0 - 1e-6));
-    tot = mass_of(f, l);
+    tot = hstpf__grid_mass(f, l);
     f->grid.pred_mass[l] = tot;
     m->loglik = 0;
     if (st->has_y) {
@@ -174,8 +169,11 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         for (i = 0; i < NS; ++i) {
             f->grid.rest[l][i] *= inv;
         }
+        if (inv - inv == (real)0) { /* its largest cell is now >= 1 / (cells) */
+            return 1;
+        }
     }
-    return mass_of(f, l) > (real)0; /* a step without a fix (seldom): summed again */
+    return hstpf__grid_mass(f, l) > (real)0; /* none, or 1 / tot overflowed */
 }
 
 /* One model's step. A model that was tracking and now misses the

@@ -49,6 +49,12 @@ static inline real hstpf__grid_sum(const real *x, int n)
     return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]));
 }
 
+/* Model l's whole mass: its moving cells and its cells at rest. */
+static inline real hstpf__grid_mass(const hstpf_t *f, uint16_t l)
+{
+    return hstpf__grid_sum(f->grid.p[l], NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS);
+}
+
 /* o += c r over a whole row. Columns outside the occupied ones hold exact
  * zeros in r, so the sums are those over the occupied columns; a length
  * known at compile time and rows that cannot overlap let the loop be

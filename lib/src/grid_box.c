@@ -258,6 +258,7 @@ void hstpf__grid_speed_lattice(const int16_t *first, const int16_t *last, const 
         }
         if (h >= DV_MIN && (real)(NV - 1) * h >= need && h <= LATTICE_COARSEST * ng[3]) {
             const real v0 = a + (real)floor((double)((ng[2] - a) / h)) * h;
+            /* the second test follows from the floor but for its rounding */
             if (v0 >= (real)0 && v0 + (real)NV * h >= ng[2] + need) {
                 ng[2] = v0;
                 ng[3] = h;

@@ -62,7 +62,7 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
         f->grid.rest[l][i] *= inv;
     }
     if (!(inv - inv == (real)0)) { /* else its largest cell is >= 1 / (cells) */
-        *has_mass = hstpf__grid_sum(p, NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS) > (real)0;
+        *has_mass = hstpf__grid_mass(f, l) > (real)0;
     }
     return lmax + (real)log((double)sum);
 }
