@@ -80,6 +80,7 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->init_speed_sd = fc.init_speed_sd;
     c->roughening_k = fc.roughening_k;
     c->e_blur_sd = fc.e_blur_sd;
+    c->grid_speed_lattice = fc.grid_speed_lattice;
     c->declare_threshold = fc.declare_threshold;
     c->declare_hold_s = fc.declare_hold_s;
     c->gate_m = fc.gate_m;
@@ -130,6 +131,7 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->init_speed_sd = c->init_speed_sd;
     fc->roughening_k = c->roughening_k;
     fc->e_blur_sd = c->e_blur_sd;
+    fc->grid_speed_lattice = c->grid_speed_lattice;
     fc->declare_threshold = c->declare_threshold;
     fc->declare_hold_s = c->declare_hold_s;
     fc->gate_m = c->gate_m;

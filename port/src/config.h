@@ -43,6 +43,7 @@ typedef struct {
     double dt_nominal_s;
     double init_speed_mps, init_speed_sd;
     double roughening_k, e_blur_sd;
+    uint8_t grid_speed_lattice;
     double declare_threshold, declare_hold_s;
     double gate_m;
     /* train and inputs */

@@ -28,6 +28,8 @@ const hstpfd__key_t hstpfd__keys[] = {
      "particle engine: roughening after resampling, sd = k x spread / sqrt(M)"},
     {"e_blur_sd", K_DBL, OFF(e_blur_sd), 0, 1e3, 0,
      "particle engine: measurement density blurred by N(0, sd), m (0 = exact; for one-sided noise)"},
+    {"grid_speed_lattice", K_BOOL, OFF(grid_speed_lattice), 0, 0, 0,
+     "grid engine: 1 = each model's speed cells carried by its own dynamics, 0 = remapped every step"},
     {"declare_threshold", K_DBL, OFF(declare_threshold), 0, 1, 1,
      "model weight above which a type may be declared"},
     {"declare_hold_s", K_DBL, OFF(declare_hold_s), 0, 1e6, 0, "how long it must stay above, s"},

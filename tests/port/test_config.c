@@ -62,6 +62,18 @@ static void test_set_numbers(void **state)
     assert_int_equal(hstpfd_config_set(&cfg, "send", "no", err, sizeof err), 0);
     assert_int_equal(cfg.send, 0);
     assert_int_equal(hstpfd_config_set(&cfg, "send", "maybe", err, sizeof err), -1);
+    { /* a filter setting the daemon passes on: the library's default, then the file's */
+        hstpf_config_t lib, fc;
+        (void)hstpf_config_default(&lib);
+        hstpfd_config_default(&cfg2);
+        hstpfd_config_filter(&cfg2, &fc);
+        assert_int_equal(fc.grid_speed_lattice, lib.grid_speed_lattice);
+        assert_int_equal(hstpfd_config_set(&cfg2, "grid_speed_lattice", lib.grid_speed_lattice ? "0" : "1", err,
+                                           sizeof err), 0);
+        hstpfd_config_filter(&cfg2, &fc);
+        assert_int_equal(fc.grid_speed_lattice, !lib.grid_speed_lattice);
+        assert_int_equal(hstpfd_config_set(&cfg2, "grid_speed_lattice", "2", err, sizeof err), -1);
+    }
     assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", err, sizeof err), -1);
     assert_non_null(strstr(err, "unknown key 'nosuchkey'"));
 }

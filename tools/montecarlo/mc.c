@@ -832,7 +832,7 @@ static void usage(void)
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine] [--refine-prior Q] [--refine-spread X]\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
-            "  [--speed-lattice]  (grid: the speed cells carried by each model's map, not remapped)\n"
+            "  [--speed-lattice | --no-speed-lattice]  (grid: the speed cells carried by each model's map, or remapped)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -876,9 +876,9 @@ int main(int argc, char **argv)
             st.gauss_e = 1;
             continue;
         }
-        if (!strcmp(a, "--speed-lattice")) {
+        if (!strcmp(a, "--speed-lattice") || !strcmp(a, "--no-speed-lattice")) {
             /* the grid's speed cells carried by each model's map (docs/grid.md) */
-            st.base.grid_speed_lattice = 1;
+            st.base.grid_speed_lattice = (uint8_t)(a[2] == 's');
             continue;
         }
         if (!strcmp(a, "--refine") || !strcmp(a, "--no-refine")) {
