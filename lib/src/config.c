@@ -42,7 +42,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->refine_prior_q = 0.01;
     cfg->refine_spread = 0.3; /* docs/model.md, "Prior" */
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
-    cfg->grid_speed_lattice = 0; /* until its reruns: docs/grid.md */
+    cfg->grid_speed_lattice = 1; /* docs/grid.md, "The speed lattice" */
     return HSTPF_OK;
 }
 

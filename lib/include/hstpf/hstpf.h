@@ -282,10 +282,10 @@ typedef struct {
      *  ones under its own dynamics (their width doubled or halved until
      *  the predicted box fits; a box at its quantiles instead, remapped,
      *  where those cells would be over 1.5 times its own or start below
-     *  0), so the speed axis is seldom remapped; 0: the speed box at the
-     *  predicted marginal's quantiles, remapped (0: not yet the default,
-     *  until issue 13's scenarios are rerun with it; docs/grid.md, "The
-     *  speed lattice": paper Case 2 decides 4.4 s sooner). Other engines
+     *  0), so the speed axis is seldom remapped (the default; docs/grid.md,
+     *  "The speed lattice": paper Case 2 decides 4.4 s sooner); 0: the
+     *  speed box at the predicted marginal's quantiles, remapped at every
+     *  step (the default before the thirteenth session). Other engines
      *  ignore it. */
     uint8_t grid_speed_lattice;
     /** Caller-owned memory for the engine in use: the particles or the
