@@ -395,6 +395,9 @@ typedef struct {
  * speed than position cells: the types differ in W(v), so the speed axis
  * decides (docs/grid.md, "Cells": Case 2's median decision, 400 seeds,
  * 147 s on 20 x 72 against 152 s on 48 x 48, which has 60 % more cells).
+ * cfg.grid_speed_lattice is measured at 20 x 72; at 48 x 48 it declared a
+ * wrong type in 3 of 200 paper Case 2 runs: at other capacities, measure
+ * it on and off (docs/grid.md, "Cells").
  */
 #ifndef HSTPF_GRID_NS
 #define HSTPF_GRID_NS 20 /**< grid cells in position */
