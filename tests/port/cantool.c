@@ -9,6 +9,8 @@
 #include <errno.h>
 #include <net/if.h>
 #include <poll.h>
+#include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -121,17 +123,38 @@ static int play(const char *ifname, const char *path, double speedup)
     return 0;
 }
 
+static volatile sig_atomic_t stop;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop = 1;
+}
+
 static int dump(const char *ifname, double seconds)
 {
     const int s = open_bound(ifname);
     const int64_t end = mono_us() + (int64_t)(seconds * 1e6);
+    const int on = 1, rcvbuf = 4 << 20;
+    unsigned long frames = 0;
+    uint32_t overflows = 0;
+    struct sigaction sa;
     if (s < 0) {
         return 1;
     }
-    /* whole lines only: the dump is ended by a signal, and a fully buffered
-     * stdout would leave a line cut at a 4 KiB boundary */
-    setvbuf(stdout, NULL, _IOLBF, 0);
-    for (;;) {
+    /* A dump that falls behind (a busy machine, an emulated VM) loses
+     * frames in the kernel: a large queue, and its drop count reported. */
+    if (setsockopt(s, SOL_SOCKET, SO_RCVBUFFORCE, &rcvbuf, sizeof rcvbuf) != 0) {
+        (void)setsockopt(s, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+    }
+    (void)setsockopt(s, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+    /* ended by SIGTERM or SIGINT: stdout is flushed at the end, so it
+     * needs no write per line */
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    (void)sigaction(SIGTERM, &sa, NULL);
+    (void)sigaction(SIGINT, &sa, NULL);
+    while (!stop) {
         struct pollfd p;
         const int64_t left = end - mono_us();
         if (left <= 0) {
@@ -139,10 +162,11 @@ static int dump(const char *ifname, double seconds)
         }
         p.fd = s;
         p.events = POLLIN;
-        if (poll(&p, 1, (int)(left / 1000) + 1) > 0) {
+        /* at most 100 ms, so that a signal just before poll ends it soon */
+        if (poll(&p, 1, left > 100000 ? 100 : (int)(left / 1000) + 1) > 0) {
             struct can_frame cf;
             struct iovec iov = {&cf, sizeof cf};
-            char ctrl[CMSG_SPACE(sizeof(struct timeval))];
+            char ctrl[CMSG_SPACE(sizeof(struct timeval)) + CMSG_SPACE(sizeof(uint32_t))];
             struct msghdr msg;
             struct cmsghdr *cm;
             hstpfd_frame_t f;
@@ -161,6 +185,8 @@ static int dump(const char *ifname, double seconds)
                     struct timeval tv;
                     memcpy(&tv, CMSG_DATA(cm), sizeof tv);
                     f.t_us = (int64_t)tv.tv_sec * 1000000 + tv.tv_usec;
+                } else if (cm->cmsg_level == SOL_SOCKET && cm->cmsg_type == SO_RXQ_OVFL) {
+                    memcpy(&overflows, CMSG_DATA(cm), sizeof overflows);
                 }
             }
             f.flags = (cf.can_id & CAN_EFF_FLAG) ? HSTPFD_FRAME_EXT : 0;
@@ -169,10 +195,14 @@ static int dump(const char *ifname, double seconds)
             memcpy(f.data, cf.data, f.len);
             if (hstpfd_candump_format(&f, ifname, line, sizeof line) > 0) {
                 fputs(line, stdout);
+                ++frames;
             }
         }
     }
     close(s);
+    fflush(stdout);
+    fprintf(stderr, "cantool: dumped %lu frames, %lu dropped by the kernel (receive queue full)\n", frames,
+            (unsigned long)overflows);
     return 0;
 }
 

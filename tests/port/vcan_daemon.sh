@@ -64,7 +64,7 @@ kill $dump 2>/dev/null || true; wait $dump 2>/dev/null || true
 # (10-50x slower, more on a busy machine: 1180 ms seen at load 10)
 [ "$term_ms" -le "${HSTPF_TERM_MS_MAX:-5000}" ] || fail "SIGTERM took $term_ms ms"
 grep -q "$iface: reopened" "$tmp/hstpfd.err" || fail "no reopen message"
-cat "$tmp/play.err"
+cat "$tmp/play.err" "$tmp/dump.err"
 
 python3 - "$tmp/summary.json" "$tmp/bus.log" <<'PY' || fail "checks failed"
 import json, sys
