@@ -30,7 +30,11 @@
 # Options (-D...): HSTPF_SOURCE_DIR (default: this file's parent folder),
 # HSTPF_FOOTPRINT_DIR (default <source>/build-m4f-footprint),
 # HSTPF_GENERATOR (default Ninja if found), HSTPF_BUILD_TYPE (Release = -O2;
-# MinSizeRel = -Os), HSTPF_HOST_DEMO.
+# MinSizeRel = -Os), HSTPF_HOST_DEMO, HSTPF_FOOTPRINT_DEFINES (capacities
+# for the library and the firmware alike, e.g. "-DHSTPF_GRID_NS=10
+# -DHSTPF_GRID_NV=36": the budgets are for the defaults, so larger
+# capacities may exceed them; the figures before them are what such a run
+# is for).
 # Environment: HSTPF_CROSS_OPTIONAL=1 turns a missing arm-none-eabi-gcc into a
 # skip (prints HSTPF-CROSS-SKIPPED) and a missing qemu-system-arm into a
 # skipped run; without it both are failures.
@@ -96,7 +100,7 @@ message("== Cortex-M4F: configuring ${HSTPF_SOURCE_DIR} with ${_toolchain} (${HS
 run_checked("configure (cross)" ${CMAKE_COMMAND} -S "${HSTPF_SOURCE_DIR}" -B "${_libdir}"
             -G "${HSTPF_GENERATOR}" "-DCMAKE_TOOLCHAIN_FILE=${_toolchain}"
             "-DCMAKE_BUILD_TYPE=${HSTPF_BUILD_TYPE}"
-            "-DHSTPF_M4F_EXTRA_C_FLAGS=-fstack-usage -fcallgraph-info=su")
+            "-DHSTPF_M4F_EXTRA_C_FLAGS=-fstack-usage -fcallgraph-info=su ${HSTPF_FOOTPRINT_DEFINES}")
 run_checked("build (cross)" ${CMAKE_COMMAND} --build "${_libdir}")
 set(_lib "${_libdir}/lib/libhstpf.a")
 if(NOT EXISTS "${_lib}")
@@ -207,7 +211,7 @@ message("== Cortex-M4F: link test and size probes (tests/cross/firmware)")
 run_checked("configure (firmware)" ${CMAKE_COMMAND} -S "${HSTPF_SOURCE_DIR}/tests/cross/firmware"
             -B "${_fwdir}" -G "${HSTPF_GENERATOR}" "-DCMAKE_TOOLCHAIN_FILE=${_toolchain}"
             "-DCMAKE_BUILD_TYPE=${HSTPF_BUILD_TYPE}" "-DHSTPF_SOURCE_DIR=${HSTPF_SOURCE_DIR}"
-            "-DHSTPF_LIBRARY=${_lib}")
+            "-DHSTPF_LIBRARY=${_lib}" "-DHSTPF_M4F_EXTRA_C_FLAGS=${HSTPF_FOOTPRINT_DEFINES}")
 run_checked("build (firmware)" ${CMAKE_COMMAND} --build "${_fwdir}")
 
 # the detector must see a library that does call malloc
