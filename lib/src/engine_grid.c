@@ -143,8 +143,8 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
     const uint16_t l = (uint16_t)(m - f->m);
     const real dt = (real)st->dt, scale = (real)st->scale;
     real ng[4], tot, rtot, held;
-    real *p = f->grid.p[l], *g = f->grid.geom[l];
-    int i, has_mass;
+    real *g = f->grid.geom[l];
+    int has_mass;
     hstpf__grid_new_box(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng, &tot, &rtot);
     held = hstpf__grid_transport(f, m, l, dt, acc, ng, tot, rtot);
     hstpf__grid_diffuse(f, l, scale, ng);
@@ -161,19 +161,7 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         m->loglik = hstpf__grid_measure(f, m, l, (real)st->yr, &has_mass);
         return has_mass;
     }
-    if (tot > (real)0) {
-        const real inv = (real)1 / tot;
-        for (i = 0; i < NS * NV; ++i) {
-            p[i] *= inv;
-        }
-        for (i = 0; i < NS; ++i) {
-            f->grid.rest[l][i] *= inv;
-        }
-        if (inv - inv == (real)0) { /* its largest cell is now >= 1 / (cells) */
-            return 1;
-        }
-    }
-    return hstpf__grid_mass(f, l) > (real)0; /* none, or 1 / tot overflowed */
+    return tot > (real)0 && hstpf__grid_normalise(f, l, tot); /* a step without a fix */
 }
 
 /* One model's step. A model that was tracking and now misses the

@@ -55,6 +55,23 @@ static inline real hstpf__grid_mass(const hstpf_t *f, uint16_t l)
     return hstpf__grid_sum(f->grid.p[l], NS * NV) + hstpf__grid_sum(f->grid.rest[l], NS);
 }
 
+/* Model l's cells (moving and at rest) divided by tot > 0; returns whether
+ * any holds mass after it: always, unless 1 / tot overflowed (its largest
+ * cell is then >= 1 / (cells)), when they are summed again. */
+static inline int hstpf__grid_normalise(hstpf_t *f, uint16_t l, real tot)
+{
+    const real inv = (real)1 / tot;
+    real *p = f->grid.p[l], *rest = f->grid.rest[l];
+    int i;
+    for (i = 0; i < NS * NV; ++i) {
+        p[i] *= inv;
+    }
+    for (i = 0; i < NS; ++i) {
+        rest[i] *= inv;
+    }
+    return inv - inv == (real)0 || hstpf__grid_mass(f, l) > (real)0;
+}
+
 /* o += c r over a whole row. Columns outside the occupied ones hold exact
  * zeros in r, so the sums are those over the occupied columns; a length
  * known at compile time and rows that cannot overlap let the loop be
@@ -95,7 +112,6 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
 /* cfg.grid_speed_lattice: ng's speed cells moved onto the lattice of the
  * old rows' images vimg (rows first[j] <= last[j] occupied), or left. */
 void hstpf__grid_speed_lattice(const int16_t *first, const int16_t *last, const real *vimg, real *ng);
-
 
 /* ---- grid_transport.c: step 2 ------------------------------------------ */
 

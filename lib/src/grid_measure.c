@@ -12,7 +12,7 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
 {
     const hstpf_dist_t *de = &f->de;
     real *p = f->grid.p[l], *g = f->grid.geom[l], *ll = f->grid.row;
-    real lmax = (real)-3e38, sum = 0, inv;
+    real lmax = (real)-3e38, sum = 0;
     int i, j, all_floor = 1;
     (void)hstpf__grid_marginals(f, p, f->grid.rest[l]);
     for (i = 0; i < NS; ++i) {
@@ -50,19 +50,10 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
         f->grid.rest[l][i] *= ll[i];
         sum += f->grid.rest[l][i];
     }
-    *has_mass = sum > (real)0;
-    if (!*has_mass) { /* every cell underflowed: keep the prediction */
+    if (!(sum > (real)0)) { /* every cell underflowed: keep the prediction */
+        *has_mass = 0;
         return lmax;
     }
-    inv = (real)1 / sum;
-    for (i = 0; i < NS * NV; ++i) {
-        p[i] *= inv;
-    }
-    for (i = 0; i < NS; ++i) {
-        f->grid.rest[l][i] *= inv;
-    }
-    if (!(inv - inv == (real)0)) { /* else its largest cell is >= 1 / (cells) */
-        *has_mass = hstpf__grid_mass(f, l) > (real)0;
-    }
+    *has_mass = hstpf__grid_normalise(f, l, sum);
     return lmax + (real)log((double)sum);
 }
