@@ -158,13 +158,14 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     f->xi = HSTPF_G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
     f->engine = (uint8_t)hstpf__engine_resolve(cfg);
     /* Kalman: the rows' likelihoods are its own kind. Grid: through the
-     * yardstick (refine.c), sound only on Gaussian process noise: a
-     * heavy-tailed speed jump fits the hypothesis' free theta better than a
-     * row in the Gaussian yardstick (docs/model.md). Particles: no. */
+     * yardstick (refine.c); under non-Gaussian process noise only with
+     * refine = 2, as it delays paper Case 2's decisions (docs/model.md).
+     * Particles: Monte Carlo likelihoods, no. */
     f->rf.active = (uint8_t)(cfg->refine && cfg->refine_prior_q > 0.0 &&
                              (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN ||
-                              (f->engine == (uint8_t)HSTPF_ENGINE_GRID && cfg->noise_s.kind == HSTPF_DIST_GAUSSIAN &&
-                               cfg->noise_v.kind == HSTPF_DIST_GAUSSIAN)));
+                              (f->engine == (uint8_t)HSTPF_ENGINE_GRID &&
+                               (cfg->refine == 2u || (cfg->noise_s.kind == HSTPF_DIST_GAUSSIAN &&
+                                                      cfg->noise_v.kind == HSTPF_DIST_GAUSSIAN)))));
     for (l = 0; l < cfg->n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         f->theta[l] = cfg->models[l];

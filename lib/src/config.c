@@ -162,7 +162,7 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     if (c->grid_speed_lattice > 1u) {
         return fail(field, "grid_speed_lattice", HSTPF_E_CONFIG);
     }
-    if (c->refine > 1u) {
+    if (c->refine > 2u) {
         return fail(field, "refine", HSTPF_E_CONFIG);
     }
     return HSTPF_OK;

@@ -44,6 +44,7 @@ typedef struct {
     double init_speed_mps, init_speed_sd;
     double roughening_k, e_blur_sd;
     uint8_t grid_speed_lattice;
+    uint16_t refine; /* hstpf_config_t.refine */
     double declare_threshold, declare_hold_s;
     double gate_m;
     /* train and inputs */

@@ -115,6 +115,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     cfg.seed = fuzz_u64(&in);
     /* from the seed's bits, so the corpus reads as before: off, on, refused */
     cfg.grid_speed_lattice = (uint8_t)((cfg.seed >> 7) % 3u);
+    cfg.refine = (uint8_t)((cfg.seed >> 9) % 4u); /* off, on, under any noise, refused */
     {
         const uint8_t e = fuzz_u8(&in);
         cfg.engine = (hstpf_engine_t)(e % 4u);

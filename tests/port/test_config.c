@@ -73,6 +73,11 @@ static void test_set_numbers(void **state)
         hstpfd_config_filter(&cfg2, &fc);
         assert_int_equal(fc.grid_speed_lattice, !lib.grid_speed_lattice);
         assert_int_equal(hstpfd_config_set(&cfg2, "grid_speed_lattice", "2", err, sizeof err), -1);
+        assert_int_equal(fc.refine, lib.refine);
+        assert_int_equal(hstpfd_config_set(&cfg2, "refine", "2", err, sizeof err), 0);
+        hstpfd_config_filter(&cfg2, &fc);
+        assert_int_equal(fc.refine, 2);
+        assert_int_equal(hstpfd_config_set(&cfg2, "refine", "3", err, sizeof err), -1);
     }
     assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", err, sizeof err), -1);
     assert_non_null(strstr(err, "unknown key 'nosuchkey'"));

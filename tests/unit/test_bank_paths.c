@@ -132,6 +132,8 @@ static void test_refusals(void **state)
 
     base_config(&c, HSTPF_ENGINE_KALMAN, 2);
     c.refine = 2;
+    assert_int_equal(hstpf_config_check(&c, &field), HSTPF_OK);
+    c.refine = 3;
     assert_int_equal(hstpf_config_check(&c, &field), HSTPF_E_CONFIG);
     assert_string_equal(field, "refine");
     c.refine = 1;

@@ -1,7 +1,7 @@
 /* The continuous-theta hypothesis (cfg.refine, issue 10): the W(v) band by
  * hand, no "no type fits" for a train that is on the table, and "no type
- * fits" for an unmodelled 20 per-mille gradient, and the hypothesis
- * switched off; the simulator's journey
+ * fits" for an unmodelled 20 per-mille gradient (Case 1 noise, Student-t
+ * fixes, and Case 2 with refine = 2), and the hypothesis switched off; the simulator's journey
  * (five stations) with Case 1 noise. */
 #include <string.h>
 
@@ -42,7 +42,7 @@ static void test_band_by_hand(void **state)
  * checks on every step that "no type fits" and a declaration exclude each
  * other. */
 static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
-                           uint64_t seed, int heavy, hstpf_estimate_t *e, int *ever_nofit)
+                           uint64_t seed, int heavy, uint8_t refine, hstpf_estimate_t *e, int *ever_nofit)
 {
     static hstpf_sim_table_t etab;
     hstpf_config_t c;
@@ -52,11 +52,16 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
     int k;
     hstpf_sim_default(&sc);
     assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
-    if (heavy) { /* Student-t position noise: engine auto runs the grid */
+    if (heavy == 1) { /* Student-t position noise: engine auto runs the grid */
         hstpf_sim_heavy(&sc, HSTPF_SIM_HEAVY_T, &etab);
         c.noise_e = sc.noise_e;
+    } else if (heavy == 2) { /* the paper's Case 2 Gamma noise, process noise too: the grid */
+        hstpf_sim_case2(&sc);
+        c.noise_s = sc.noise_s;
+        c.noise_v = sc.noise_v;
+        c.noise_e = sc.noise_e;
     }
-    c.refine = 1;
+    c.refine = refine;
     c.models = hstpf_train_types;
     c.n_models = HSTPF_N_TRAIN_TYPES;
     c.seed = seed;
@@ -90,7 +95,7 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
 static void run_line(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
                      uint64_t seed, hstpf_estimate_t *e, int *ever_nofit)
 {
-    run_line_noise(truth, track, n_track, seed, 0, e, ever_nofit);
+    run_line_noise(truth, track, n_track, seed, 0, 1, e, ever_nofit);
 }
 
 /* On the table: never "no type fits", and the published W(v) band covers
@@ -148,7 +153,8 @@ static void test_declared_band(void **state)
 /* An unmodelled 20 per-mille climb adds 20 N/kN to every row's W: no row
  * fits, the continuous hypothesis takes the weight, no type is declared, and
  * the refined theta carries the offset (W(0) well above every row's c0).
- * heavy: on the grid engine with Student-t fixes. */
+ * heavy: on the grid engine with Student-t fixes (1) or Case 2 noise (2,
+ * with refine = 2). */
 static void check_climb(int heavy)
 {
     static const hstpf_track_seg_t climb[] = {{0.0, 20.0, 0.0}};
@@ -156,7 +162,7 @@ static void check_climb(int heavy)
     hstpf_estimate_t e;
     int nofit;
     double w, sd;
-    run_line_noise(&truth, climb, 1, 4, heavy, &e, &nofit);
+    run_line_noise(&truth, climb, 1, 4, heavy, heavy == 2 ? 2u : 1u, &e, &nofit);
     assert_int_equal(nofit, 1);
     assert_int_equal(e.fit, HSTPF_FIT_NONE);
     assert_true(e.q_offtable > 0.99f);
@@ -180,10 +186,29 @@ static void test_grid_yardstick(void **state)
     hstpf_estimate_t e;
     int nofit;
     (void)state;
-    run_line_noise(&truth, NULL, 0, 3, 1, &e, &nofit);
+    run_line_noise(&truth, NULL, 0, 3, 1, 1, &e, &nofit);
     assert_int_equal(nofit, 0);
     assert_true(e.q_offtable < 0.05f);
     check_climb(1);
+}
+
+/* Case 2's Gamma process noise: refine = 1 leaves the hypothesis out (no
+ * weight, even on the climb); refine = 2 runs it through the yardstick:
+ * on the table no "no type fits", the climb as above. */
+static void test_grid_case2(void **state)
+{
+    static const hstpf_track_seg_t climb[] = {{0.0, 20.0, 0.0}};
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit;
+    (void)state;
+    run_line_noise(&truth, climb, 1, 5, 2, 1, &e, &nofit);
+    assert_int_equal(nofit, 0);
+    TU_CLOSE(e.q_offtable, 0.0, 0.0);
+    run_line_noise(&truth, NULL, 0, 3, 2, 2, &e, &nofit);
+    assert_int_equal(nofit, 0);
+    assert_true(e.q_offtable < 0.05f);
+    check_climb(2);
 }
 
 /* Switched off: no continuous hypothesis, gain 1, weights of the rows
@@ -222,6 +247,7 @@ int main(void)
         cmocka_unit_test(test_band_by_hand),
         cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
         cmocka_unit_test(test_gradient_no_fit), cmocka_unit_test(test_grid_yardstick),
+        cmocka_unit_test(test_grid_case2),
         cmocka_unit_test(test_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
