@@ -246,6 +246,10 @@ static int finite_models(const hstpf_t *f)
             z += fabs(m->kx[0]) + fabs(m->kx[1]) + fabs(m->kp[0]) + fabs(m->kp[2]);
         }
     }
+    if (hstpf__refine_on_grid(f)) {
+        const hstpf_model_t *m = &f->m[f->cfg.n_models];
+        z += fabs((double)m->s_mean) + fabs((double)m->v_mean) + fabs((double)m->s_var) + fabs((double)m->v_var);
+    }
     for (i = 0; i < HSTPF_REFINE_NZ; ++i) { /* zero while the hypothesis is off */
         z += fabs(f->rf.kz[i]) + fabs(f->rf.kp[i * (HSTPF_REFINE_NZ + 1)]);
     }
@@ -378,6 +382,11 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         hstpf__refine_update(f, &st);
         if (hstpf__refine_yardstick(f)) {
             hstpf__refine_anchor(f, &st);
+        } else if (hstpf__refine_on_grid(f)) { /* scored by its grid, not the EKF */
+            const hstpf_model_t *mh = &f->m[f->cfg.n_models];
+            f->rf.loglik = (double)mh->loglik;
+            f->rf.floored = (uint8_t)(st.has_y && mh->floor_run > 0u);
+            f->rf.held = mh->held;
         }
     }
     {

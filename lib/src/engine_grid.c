@@ -118,20 +118,26 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
-/* A model placed from fixes: its cells, and its row's Kalman yardstick
- * when the continuous hypothesis is scored with it (refine.c). */
+/* A model placed from fixes: its cells, and with the continuous
+ * hypothesis its row's Kalman filter too (the yardstick it is scored with,
+ * and where lock.c places the hypothesis' EKF; refine.c). */
 static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
     hstpf__grid_place_one(f, m, q);
-    if (hstpf__refine_yardstick(f)) {
+    if (f->rf.active) {
         hstpf__kalman_place(f, m, q);
     }
 }
 
+static uint16_t n_grids(const hstpf_t *f);
+
 static void place_all(hstpf_t *f, const hstpf__acq_t *q)
 {
     uint16_t l;
-    for (l = 0; l < f->cfg.n_models; ++l) {
+    if (hstpf__refine_on_grid(f)) {
+        (void)hstpf__refine_grid_theta(f, NULL);
+    }
+    for (l = 0; l < n_grids(f); ++l) {
         place_one(f, &f->m[l], q);
     }
 }
@@ -146,6 +152,11 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
     real *g = f->grid.geom[l];
     int has_mass;
     hstpf__grid_new_box(f, m, l, dt, acc, scale, st->has_y, (real)st->yr, ng, &tot, &rtot);
+    if (f->grid.theta_sd > (real)0) { /* the box reaches the Gaussian's tails too */
+        const real w = (real)THETA_REACH * f->grid.theta_sd, hi = ng[2] + (real)NV * ng[3] + w;
+        ng[2] = ng[2] - w > (real)0 ? ng[2] - w : (real)0;
+        ng[3] = (hi - ng[2]) / (real)NV;
+    }
     held = hstpf__grid_transport(f, m, l, dt, acc, ng, tot, rtot);
     hstpf__grid_diffuse(f, l, scale, ng);
     g[0] = ng[0];
@@ -214,8 +225,16 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     hstpf__grid_moments(f, m, l);
 }
 
-/* When every model misses the measurement, it is the measurement (or the
- * reference) that is off, not the models: no model's weight moves. */
+/* The grid models: the rows, and refine = 2's hypothesis. */
+static uint16_t n_grids(const hstpf_t *f)
+{
+    return (uint16_t)(f->cfg.n_models + (hstpf__refine_grid_cfg(&f->cfg) ? 1u : 0u));
+}
+
+/* When every row misses the measurement, it is the measurement (or the
+ * reference) that is off, not the models: no model's weight moves. The
+ * hypothesis' grid steps at the EKF's theta of the step before, so that
+ * its likelihood is a prediction (refine.c). */
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 {
     uint16_t l, missed = 0;
@@ -224,8 +243,17 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
         model_step(f, &f->m[l], st);
         missed = (uint16_t)(missed + (f->m[l].floor_hits != hits));
     }
+    if (hstpf__refine_on_grid(f)) {
+        const uint32_t hits = f->m[l].floor_hits;
+        f->grid.theta_sd = (real)hstpf__refine_grid_theta(f, st);
+        model_step(f, &f->m[l], st);
+        f->grid.theta_sd = 0;
+        if (f->m[l].floor_hits == hits) {
+            missed = 0; /* it fits a fix every row misses: the rows are off */
+        }
+    }
     if (st->has_y && missed == f->cfg.n_models) {
-        for (l = 0; l < f->cfg.n_models; ++l) {
+        for (l = 0; l < n_grids(f); ++l) {
             f->m[l].loglik = 0;
         }
     }
@@ -234,7 +262,7 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 static void shift(hstpf_t *f, real d)
 {
     uint16_t l;
-    for (l = 0; l < f->cfg.n_models; ++l) {
+    for (l = 0; l < n_grids(f); ++l) {
         f->grid.geom[l][0] -= d;
         f->m[l].s_mean -= d;
         f->m[l].kx[0] -= (double)d; /* the yardstick's, if it runs */
@@ -243,14 +271,14 @@ static void shift(hstpf_t *f, real d)
 
 static size_t ws_bytes(const hstpf_config_t *c)
 {
-    return HSTPF_GRID_WS_BYTES(c->n_models);
+    return HSTPF_GRID_WS_BYTES(c->n_models + (hstpf__refine_grid_cfg(c) ? 1u : 0u));
 }
 
 /* The layout HSTPF_GRID_WS_BYTES counts: each model's cells, the
  * transported grid, the saved cells, each model's mass at rest. */
 static void attach(hstpf_t *f, void *ws)
 {
-    const size_t nm = f->cfg.n_models;
+    const size_t nm = n_grids(f);
     real *r = (real *)ws;
     f->grid.p = (real(*)[NS * NV])(void *)r;
     r += nm * NS * NV;

@@ -36,7 +36,11 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead)
         const hstpf_model_t *m = &f->m[l];
         s += wb[l] * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
     }
-    s += wb[f->cfg.n_models] * (f->rf.kz[0] + dt_ahead * f->rf.kz[1]);
+    if (f->rf.active) {
+        double rs, rv, pss, pvv;
+        hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
+        s += wb[f->cfg.n_models] * (rs + dt_ahead * rv);
+    }
     return s;
 }
 
@@ -166,7 +170,7 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
 {
     uint16_t l;
     double s = 0.0, v = 0.0, vs = 0.0, vv = 0.0, th[3] = {0.0, 0.0, 0.0}, cov[9];
-    double wb[HSTPF_MAX_MODELS + 1];
+    double wb[HSTPF_MAX_MODELS + 1], rs = 0.0, rv = 0.0, rpss = 0.0, rpvv = 0.0;
     int16_t best = 0;
     if (f == NULL || out == NULL) {
         return HSTPF_E_NULL;
@@ -195,8 +199,11 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
             best = (int16_t)l;
         }
     }
-    s += wb[f->cfg.n_models] * f->rf.kz[0];
-    v += wb[f->cfg.n_models] * f->rf.kz[1];
+    if (f->rf.active) {
+        hstpf__refine_sv(f, &rs, &rv, &rpss, &rpvv);
+        s += wb[f->cfg.n_models] * rs;
+        v += wb[f->cfg.n_models] * rv;
+    }
     /* the mixture's variance: within each model plus between the models */
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
@@ -205,9 +212,9 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
         vv += wb[l] * ((double)m->v_var + dv * dv);
     }
     if (f->rf.active) {
-        const double wr = wb[f->cfg.n_models], ds = f->rf.kz[0] - s, dv = f->rf.kz[1] - v;
-        vs += wr * (f->rf.kp[0] + ds * ds);
-        vv += wr * (f->rf.kp[HSTPF_REFINE_NZ + 1] + dv * dv);
+        const double wr = wb[f->cfg.n_models], ds = rs - s, dv = rv - v;
+        vs += wr * (rpss + ds * ds);
+        vv += wr * (rpvv + dv * dv);
         out->q_offtable = (real)exp(f->rf.logq);
         out->gain = (real)f->rf.kz[5];
         out->gain_sd = (real)sqrt(f->rf.kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ - 1]);

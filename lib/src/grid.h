@@ -18,6 +18,7 @@ typedef hstpf_real_t real;
 #define QN ((int)HSTPF_DIST_QN)
 #define GRID_TAIL ((real)1e-5)  /* mass a box leaves out on each side */
 #define WIDE_TAIL ((real)1e-9)  /* the same when a step is retried */
+#define THETA_REACH 4.5         /* sd of theta's spread a box reaches (its 1e-5 tail is 4.3) */
 #define PULL_SD 2.0            /* measurement beyond this many sd: keep that tail */
 #define DS_MIN ((real)1e-3)     /* narrowest cell, m: float positions near 1 km */
 #define DV_MIN ((real)1e-4)     /* narrowest cell, m/s */

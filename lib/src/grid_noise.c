@@ -75,6 +75,33 @@ static void conv_row(real *restrict o, real *restrict pad, const real *ks, int n
     memcpy(o, acc, sizeof acc);
 }
 
+/* refine = 2's grid: its speeds spread by N(0, theta_sd^2) too (theta's
+ * uncertainty, refine.c), through work; what would go below the box is
+ * dropped (it scores as mass the prediction lost). */
+static void theta_spread(hstpf_t *f, real *p, const real *ng)
+{
+    real *w = f->grid.work, *k = f->grid.kv;
+    int m0, nk, j, t, i;
+    nk = hstpf__grid_kernel(&f->unit, f->grid.theta_sd, ng[3], NV - 1, f->grid.tail, k, &m0);
+    if (nk == 1 && m0 == 0) {
+        return;
+    }
+    memcpy(w, p, sizeof(real) * (size_t)(NS * NV));
+    for (j = 0; j < NV; ++j) { /* p row j = sum_t k[t] w row (j - m0 - t) */
+        real acc[NS];
+        for (i = 0; i < NS; ++i) {
+            acc[i] = 0;
+        }
+        for (t = 0; t < nk; ++t) {
+            const int src = j - m0 - t;
+            if (src >= 0 && src < NV && k[t] > (real)0) {
+                hstpf__grid_axpy_row(acc, w + src * NS, k[t]);
+            }
+        }
+        memcpy(p + j * NS, acc, sizeof acc);
+    }
+}
+
 /* Step 3: speed noise from work into p (what it would take below 0 goes to
  * rest: a train never reverses), then position noise in place, also on the
  * mass that came to rest within the step; the held mass gets none. Only
@@ -137,6 +164,9 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
             conv_row(p + j * NS, w, ks, nks, m0s);
         }
         conv_row(rpend, w, ks, nks, m0s);
+    }
+    if (f->grid.theta_sd > (real)0) {
+        theta_spread(f, p, ng);
     }
     for (i = 0; i < NS; ++i) {
         rest[i] = f->grid.rnew[i] + rpend[i];

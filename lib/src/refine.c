@@ -235,6 +235,57 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
     }
 }
 
+/* The grid then predicts with theta's mean, and its speeds spread by the
+ * acceleration's sd under theta's covariance, so that it scores the
+ * hypothesis (theta unknown within its posterior) rather than one plug-in
+ * theta: early on, with theta still the prior's, the rows are not all
+ * better by far; and under a one-sided w_v (Case 2) the grid can still
+ * slow down more than its mean says (an unmodelled climb), which no row
+ * can. The gain k (fixed at 1 by default) scales the traction in the EKF
+ * only. */
+double hstpf__refine_grid_theta(hstpf_t *f, const hstpf__step_t *st)
+{
+    hstpf_model_t *m = &f->m[f->cfg.n_models];
+    const double *z = f->rf.kz, *p = f->rf.kp;
+    const double c0 = z[2] > 0.0 ? z[2] : 0.0, c1 = z[3] > 0.0 ? z[3] : 0.0, c2 = z[4] > 0.0 ? z[4] : 0.0;
+    const double vk = 3.6 * (double)m->v_mean;
+    double g[4], var = 0.0;
+    int i, j;
+    m->k0 = (hstpf_real_t)(f->xi * c0);
+    m->k1 = (hstpf_real_t)(f->xi * c1 * 3.6);
+    m->k2 = (hstpf_real_t)(f->xi * c2 * 12.96);
+    if (st == NULL) {
+        return 0.0;
+    }
+    /* a = k xu - xi (c0 + c1 V + c2 V^2) - g: its gradient in (c0, c1, c2, k) */
+    g[0] = -f->xi;
+    g[1] = -f->xi * vk;
+    g[2] = -f->xi * vk * vk;
+    g[3] = st->xu;
+    for (i = 0; i < 4; ++i) {
+        for (j = 0; j < 4; ++j) {
+            var += g[i] * g[j] * p[(2 + i) * NZ + 2 + j];
+        }
+    }
+    return var > 0.0 ? st->dt * sqrt(var) : 0.0;
+}
+
+void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv)
+{
+    if (hstpf__refine_on_grid(f)) {
+        const hstpf_model_t *m = &f->m[f->cfg.n_models];
+        *s = (double)m->s_mean;
+        *v = (double)m->v_mean;
+        *pss = (double)m->s_var;
+        *pvv = (double)m->v_var;
+    } else {
+        *s = f->rf.kz[0];
+        *v = f->rf.kz[1];
+        *pss = f->rf.kp[0];
+        *pvv = f->rf.kp[NZ + 1];
+    }
+}
+
 void hstpf__refine_theta(const hstpf_t *f, double *th, double *cov)
 {
     const hstpf_refine_t *r = &f->rf;

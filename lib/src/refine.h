@@ -14,13 +14,34 @@ void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double
 /* One predict/update step; sets rf.loglik, rf.held, rf.nis. */
 void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st);
 
-/* On an engine whose likelihoods are not Kalman filters' (the grid's), the
- * rows also run as Kalman filters on the noise's moments: the yardstick
- * the hypothesis is scored with (refine.c). */
+/* cfg.refine = 2 on the grid engine: the hypothesis is also one more grid
+ * model, f->m[n_models], run at the EKF's theta of the step before, which
+ * scores it under the real noise (refine.c). */
+static inline int hstpf__refine_grid_cfg(const hstpf_config_t *c)
+{
+    return c->refine == 2u && c->refine_prior_q > 0.0;
+}
+static inline int hstpf__refine_on_grid(const hstpf_t *f)
+{
+    return f->rf.active && f->engine == (uint8_t)HSTPF_ENGINE_GRID && f->cfg.refine == 2u;
+}
+
+/* Otherwise, on an engine whose likelihoods are not Kalman filters' (the
+ * grid's), the rows also run as Kalman filters on the noise's moments: the
+ * yardstick the hypothesis is scored with (refine.c). */
 static inline int hstpf__refine_yardstick(const hstpf_t *f)
 {
-    return f->rf.active && f->engine != (uint8_t)HSTPF_ENGINE_KALMAN;
+    return f->rf.active && f->engine != (uint8_t)HSTPF_ENGINE_KALMAN && !hstpf__refine_on_grid(f);
 }
+
+/* refine = 2 on the grid: its grid model's resistance from the EKF's
+ * theta; returns the sd of the speed change over the step st (if not
+ * NULL) that theta's uncertainty adds, for the grid to spread by. */
+double hstpf__refine_grid_theta(hstpf_t *f, const hstpf__step_t *st);
+
+/* The hypothesis' (s, v) mean and variances as published: its grid
+ * model's with refine = 2 on the grid, else the EKF's. */
+void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv);
 
 /* The yardstick's step, after the engine's and hstpf__refine_update: the
  * hypothesis' increment becomes the leading row's own plus the log ratio

@@ -423,7 +423,9 @@ typedef struct {
  * Particles: s, v and log weight per particle and model, and three
  * per-particle arrays for one model's step (plus 16-bit counts). Grid:
  * the cells of every model, the transported grid and a model's saved
- * cells for a retried step, and each model's mass at rest.
+ * cells for a retried step, and each model's mass at rest; with
+ * refine = 2 the continuous hypothesis is one more grid model:
+ * HSTPF_GRID_WS_BYTES(n_models + 1).
  */
 #define HSTPF_WORKSPACE_ALIGN 8u /**< alignment of the workspace, bytes */
 #define HSTPF__WS_ROUND(b) ((((size_t)(b)) + 7u) & ~(size_t)7u)
@@ -433,11 +435,12 @@ typedef struct {
 #define HSTPF_GRID_WS_BYTES(n_models)                                                                      \
     HSTPF__WS_ROUND(sizeof(hstpf_real_t) * (((size_t)(n_models) + 2u) * (size_t)HSTPF__GRID_CELLS +         \
                                             ((size_t)(n_models) + 1u) * (size_t)HSTPF_GRID_NS + 4u))
-/** Enough workspace for any engine with n_models models (and n_particles). */
+/** Enough workspace for any engine with n_models models (and n_particles),
+ *  refine = 2's grid included. */
 #define HSTPF_WORKSPACE_ANY_BYTES(n_models, n_particles)                                                   \
-    (HSTPF_PARTICLE_WS_BYTES(n_models, n_particles) > HSTPF_GRID_WS_BYTES(n_models)                       \
+    (HSTPF_PARTICLE_WS_BYTES(n_models, n_particles) > HSTPF_GRID_WS_BYTES((n_models) + 1u)                \
          ? HSTPF_PARTICLE_WS_BYTES(n_models, n_particles)                                                 \
-         : HSTPF_GRID_WS_BYTES(n_models))
+         : HSTPF_GRID_WS_BYTES((n_models) + 1u))
 /** The largest workspace any engine needs at the compile-time capacities. */
 #define HSTPF_WORKSPACE_MAX_BYTES HSTPF_WORKSPACE_ANY_BYTES(HSTPF_MAX_MODELS, HSTPF_MAX_PARTICLES)
 
@@ -452,10 +455,11 @@ typedef struct {
     hstpf_real_t (*rest)[HSTPF_GRID_NS];                 /* mass at rest (v = 0), per position cell */
     hstpf_real_t *work;                                  /* the transported grid, HSTPF__GRID_CELLS */
     hstpf_real_t *save;                                  /* a model's cells before the step (+ NS + 4) */
-    hstpf_real_t geom[HSTPF_MAX_MODELS][4];              /* s0, ds, v0, dv: first edges, widths */
-    hstpf_real_t pred_mass[HSTPF_MAX_MODELS];            /* mass kept by the last prediction */
+    hstpf_real_t geom[HSTPF_MAX_MODELS + 1][4];          /* s0, ds, v0, dv: first edges, widths (+ refine = 2's) */
+    hstpf_real_t pred_mass[HSTPF_MAX_MODELS + 1];        /* mass kept by the last prediction */
     hstpf_real_t rnew[HSTPF_GRID_NS], rpend[HSTPF_GRID_NS]; /* rest being built: held, and to be diffused */
     hstpf_real_t tail;                                   /* mass a box leaves out per side */
+    hstpf_real_t theta_sd;                               /* this step's speed sd from theta (refine = 2's grid) */
     hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
     hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
     hstpf_real_t vimg[HSTPF_GRID_NV + 1];                /* speed-cell edges after the dynamics */
@@ -505,7 +509,7 @@ typedef struct {
 typedef struct {
     uint32_t magic;
     hstpf_config_t cfg;              /* models/track pointers cleared */
-    hstpf_model_t m[HSTPF_MAX_MODELS];
+    hstpf_model_t m[HSTPF_MAX_MODELS + 1]; /* the rows; m[n_models]: refine = 2's grid */
     hstpf_theta_t theta[HSTPF_MAX_MODELS];
     hstpf_dist_t ds, dv, de, unit;   /* noise tables; unit = N(0,1) */
     hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS];
