@@ -93,7 +93,7 @@ static double median(const double *x, unsigned n)
 static void usage(void)
 {
     fprintf(stderr,
-            "usage: hstpf-bench [--json] [--case 1|2] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
+            "usage: hstpf-bench [--json] [--case 1|2] [--refine 0|1|2] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
             "  [--version]\n"
             "  MxN: M models, N particles; MxK: M models, Kalman engine; MxG: grid engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
@@ -166,7 +166,7 @@ int main(int argc, char **argv)
     result_t res[MAX_CONFIGS];
     unsigned n_cfg = 0, runs = 9, steps = 1801, i, k;
     double min_time = 0.3;
-    int json = 0, noise_case = 1;
+    int json = 0, noise_case = 1, refine = -1;
     hstpf_input_t *in;
     hstpf_sim_config_t sc;
     hstpf_sim_t sim;
@@ -186,6 +186,8 @@ int main(int argc, char **argv)
                 usage();
                 return 2;
             }
+        } else if (i + 1 < (unsigned)argc && strcmp(a, "--refine") == 0) {
+            refine = atoi(argv[++i]); /* cfg.refine; default: the library's */
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--runs") == 0) {
             runs = (unsigned)strtoul(argv[++i], NULL, 10);
         } else if (i + 1 < (unsigned)argc && strcmp(a, "--steps") == 0) {
@@ -277,6 +279,9 @@ int main(int argc, char **argv)
         cfg.n_models = (uint16_t)r->models;
         cfg.n_particles = (uint16_t)r->particles;
         cfg.seed = 2;
+        if (refine >= 0) {
+            cfg.refine = (uint8_t)refine;
+        }
         cfg.engine = r->kalman ? HSTPF_ENGINE_KALMAN : (r->grid ? HSTPF_ENGINE_GRID : HSTPF_ENGINE_PARTICLE);
         if (run_once(&cfg, in, steps, 0.0, r, &r->cpu[0]) < 0.0) { /* warm-up */
             return 1;

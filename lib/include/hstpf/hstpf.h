@@ -262,11 +262,12 @@ typedef struct {
      *  train near the table but on no row: an augmented EKF on (s, v, c0,
      *  c1, c2, k) with Table 1 as prior (docs/model.md). Used by the
      *  Kalman engine, and by the grid engine under Gaussian process noise
-     *  (through a Kalman yardstick of the rows); ignored otherwise. 2: the
-     *  same, and on the grid engine under any process noise too (Case 2's
-     *  Gamma): continuous theta and "no type fits" there, at a cost in
-     *  on-table decisions (paper Case 2, 100 seeds: median 147 -> 149 s,
-     *  slowest 186 -> 995 s; docs/model.md). 0: rows only (1: a train
+     *  (through a Kalman yardstick of the rows); ignored otherwise. 2: on
+     *  the grid engine the hypothesis is scored by one more grid model at
+     *  its current theta instead, exact under any noise (Case 2's Gamma
+     *  too): continuous theta and "no type fits" there; it needs one more
+     *  grid in the workspace, HSTPF_GRID_WS_BYTES(n_models + 1), and its
+     *  step (docs/model.md, "Engines"). 0: rows only (1: a train
      *  off every row is then seldom declared a wrong type; it costs some
      *  identification speed on the table, docs/results.md). */
     uint8_t refine;
