@@ -812,7 +812,7 @@ static void print_offtable(const work_t *w, int seeds)
            "truth in %.1f%% of runs; 'no type fits' at the end in %.1f%%; a type declared in %.1f%% "
            "(refine %s)\n",
            100.0 * pct(werr, all, 0.5), 100.0 * pct(werr, all, 0.9), 100.0 * band / all, 100.0 * nofit / all,
-           100.0 * wrong / all, w->st->base.refine ? "on" : "off");
+           100.0 * wrong / all, w->st->base.refine == 2u ? "2" : (w->st->base.refine ? "on" : "off"));
     free(werr);
 }
 
