@@ -235,6 +235,15 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
     }
 }
 
+/* theta's error is the same at every step, not drawn afresh: as a fresh
+ * speed noise per step it counts for about this many steps' worth of sd
+ * (paper Case 2 seeds 1-100 and off15-case2 seeds 1-3 per truth, factor
+ * 0.5 / 1 / 2 / 4 / 8: a type declared in 25 / 16 / 12 / 18 / 45 % of the
+ * off-table runs, paper Case 2's p90 170 / 173 / 168 / 166 / 163 s and
+ * slowest 396 / 396 / 203 / 193 / 186 s; checked on other seeds,
+ * docs/results.md) */
+#define THETA_PERSIST 2.0
+
 /* The grid then predicts with theta's mean, and its speeds spread by the
  * acceleration's sd under theta's covariance, so that it scores the
  * hypothesis (theta unknown within its posterior) rather than one plug-in
@@ -267,7 +276,7 @@ double hstpf__refine_grid_theta(hstpf_t *f, const hstpf__step_t *st)
             var += g[i] * g[j] * p[(2 + i) * NZ + 2 + j];
         }
     }
-    return var > 0.0 ? st->dt * sqrt(var) : 0.0;
+    return var > 0.0 ? THETA_PERSIST * st->dt * sqrt(var) : 0.0;
 }
 
 void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv)
