@@ -158,8 +158,9 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     f->xi = HSTPF_G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
     f->engine = (uint8_t)hstpf__engine_resolve(cfg);
     /* Kalman: the rows' likelihoods are its own kind. Grid: through the
-     * yardstick (refine.c); under non-Gaussian process noise only with
-     * refine = 2, as it delays paper Case 2's decisions (docs/model.md).
+     * rows' Kalman yardstick under Gaussian process noise (refine.c; under
+     * Case 2's it delayed on-table decisions), and with refine = 2 on a
+     * grid of its own under any noise (docs/model.md, "Engines").
      * Particles: Monte Carlo likelihoods, no. */
     f->rf.active = (uint8_t)(cfg->refine && cfg->refine_prior_q > 0.0 &&
                              (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN ||
