@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "internal.h" /* hstpf__resample_counts: exposed for tests */
+#include "refine.h"   /* hstpf__refine_grid_theta, checked by hand */
 #include "testutil.h"
 #include "testbuild.h"
 
@@ -242,6 +243,59 @@ static void test_refine_engines(void **state)
             assert_float_equal((double)e.model[0].q + (double)e.model[1].q + (double)e.q_offtable, 1.0, 1e-5);
         }
     }
+}
+
+/* refine = 2 on the grid under Gamma w_v: one more grid of workspace (the
+ * hypothesis' own), the hypothesis weighed beside the rows; its grid's
+ * resistance is the EKF's theta, and its speed spread over a step of T is
+ * 2 T xi sqrt(h' C h), h = (1, V, V^2): with C = diag(0.01, 1e-6, 1e-10)
+ * at V = 100 km/h each term adds 0.01, so 2 T xi sqrt(0.03). */
+static void test_refine2_grid(void **state)
+{
+    hstpf_config_t c;
+    hstpf_estimate_t e;
+    hstpf__step_t st;
+    hstpf_model_t *mh;
+    size_t n1, n2;
+    double sd;
+    int i;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_GRID, 2);
+    c.noise_v.kind = HSTPF_DIST_GAMMA;
+    c.noise_v.shape = 0.1;
+    c.noise_v.scale = 0.05;
+    c.refine = 1;
+    assert_int_equal(hstpf_workspace_size(&c, &n1), HSTPF_OK);
+    c.refine = 2;
+    assert_int_equal(hstpf_workspace_size(&c, &n2), HSTPF_OK);
+    assert_true(n1 == HSTPF_GRID_WS_BYTES(2) && n2 == HSTPF_GRID_WS_BYTES(3));
+    c.refine_prior_q = 0.4;
+    start(&c);
+    (void)run_fixes(0.0, 30);
+    e = est();
+    assert_true(e.valid);
+    assert_true(e.q_offtable > 0.0f && e.q_offtable < 1.0f);
+    assert_float_equal((double)e.model[0].q + (double)e.model[1].q + (double)e.q_offtable, 1.0, 1e-5);
+    /* the spread, by hand (private state, set for the check) */
+    mh = &f.m[2];
+    mh->v_mean = (hstpf_real_t)(100.0 / 3.6);
+    for (i = 0; i < HSTPF_REFINE_NZ * HSTPF_REFINE_NZ; ++i) {
+        f.rf.kp[i] = 0.0;
+    }
+    f.rf.kp[2 * HSTPF_REFINE_NZ + 2] = 0.01;
+    f.rf.kp[3 * HSTPF_REFINE_NZ + 3] = 1e-6;
+    f.rf.kp[4 * HSTPF_REFINE_NZ + 4] = 1e-10;
+    f.rf.kz[2] = 1.0;
+    f.rf.kz[3] = 0.01;
+    f.rf.kz[4] = -1e-4; /* a negative coefficient drives the grid as 0 */
+    memset(&st, 0, sizeof st);
+    st.dt = 1.0;
+    st.xu = 0.3;
+    sd = hstpf__refine_grid_theta(&f, &st);
+    TU_CLOSE(sd, 2.0 * f.xi * sqrt(0.03), 1e-9);
+    TU_CLOSE((double)mh->k0, f.xi * 1.0, 1e-6 * f.xi);
+    TU_CLOSE((double)mh->k1, f.xi * 0.01 * 3.6, 1e-6 * f.xi);
+    TU_CLOSE((double)mh->k2, 0.0, 0.0);
 }
 
 /* declare_hold_s = 0: the leader is declared at the first step its q
@@ -746,6 +800,7 @@ int main(void)
         cmocka_unit_test(test_acquire_noise_mean),
         cmocka_unit_test(test_band_point_theta),
         cmocka_unit_test(test_refine_engines),
+        cmocka_unit_test(test_refine2_grid),
         cmocka_unit_test(test_declare_hold_zero),
         cmocka_unit_test(test_q_floor_top),
         cmocka_unit_test(test_roughening_off),
