@@ -643,6 +643,8 @@ static const scenario_t scenarios[] = {
     /* trains not on Table 1 under Case 2 noise (the hypothesis needs --refine-any-noise) */
     {"off15-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
     {"grade8-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
+    {"mass20-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0},
+    {"absent-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1},
 };
 
 /* Journey table: one row per truth and a total (docs/results.md). */
