@@ -105,10 +105,10 @@ for s in off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
 done
 echo "== trains not on Table 1 under Case 2 noise: refine = 2 (the hypothesis on its own grid) and the default"
-for s in off15-case2 grade8-case2 all17-case2 stops-case2; do
+for s in off15-case2 grade8-case2 mass20-case2 absent-case2 all17-case2 stops-case2; do
   "$mc" --scenario "$s" --seeds 10 --first-seed 11 --refine-any-noise --json "$out/$s-refine2.json" | tee "$out/$s-refine2.txt"
 done
-for s in off15-case2 grade8-case2; do
+for s in off15-case2 grade8-case2 mass20-case2 absent-case2; do
   "$mc" --scenario "$s" --seeds 10 --first-seed 11 --json "$out/$s.json" | tee "$out/$s.txt"
 done
 "$mc" --scenario paper2 --seeds 100 --refine-any-noise | tee "$out/paper2-refine2.txt"
