@@ -170,10 +170,7 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     for (l = 0; l < cfg->n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         f->theta[l] = cfg->models[l];
-        /* a = xi u - k0 - k1 v - k2 v^2 with v in m/s */
-        m->k0 = (real)(f->xi * cfg->models[l].c0);
-        m->k1 = (real)(f->xi * cfg->models[l].c1 * 3.6);
-        m->k2 = (real)(f->xi * cfg->models[l].c2 * 12.96);
+        hstpf__model_set_theta(f, m, cfg->models[l].c0, cfg->models[l].c1, cfg->models[l].c2);
         (void)hstpf_rng_seed(&m->rng, cfg->seed, l);
     }
     (void)hstpf_rng_seed(&f->rng, cfg->seed, HSTPF_MAX_MODELS);

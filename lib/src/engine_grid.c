@@ -118,6 +118,12 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
+/* The grid models: the rows, and refine = 2's hypothesis. */
+static uint16_t n_grids(const hstpf_config_t *c)
+{
+    return (uint16_t)(c->n_models + (hstpf__refine_grid_cfg(c) ? 1u : 0u));
+}
+
 /* A model placed from fixes: its cells, and with the continuous
  * hypothesis its row's Kalman filter too (the yardstick it is scored with,
  * and where lock.c places the hypothesis' EKF; refine.c). */
@@ -129,15 +135,13 @@ static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     }
 }
 
-static uint16_t n_grids(const hstpf_t *f);
-
 static void place_all(hstpf_t *f, const hstpf__acq_t *q)
 {
     uint16_t l;
     if (hstpf__refine_on_grid(f)) {
-        (void)hstpf__refine_grid_theta(f, NULL);
+        hstpf__refine_grid_theta(f);
     }
-    for (l = 0; l < n_grids(f); ++l) {
+    for (l = 0; l < n_grids(&f->cfg); ++l) {
         place_one(f, &f->m[l], q);
     }
 }
@@ -225,12 +229,6 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     hstpf__grid_moments(f, m, l);
 }
 
-/* The grid models: the rows, and refine = 2's hypothesis. */
-static uint16_t n_grids(const hstpf_t *f)
-{
-    return (uint16_t)(f->cfg.n_models + (hstpf__refine_grid_cfg(&f->cfg) ? 1u : 0u));
-}
-
 /* When every row misses the measurement, it is the measurement (or the
  * reference) that is off, not the models: no model's weight moves. The
  * hypothesis' grid steps at the EKF's theta of the step before, so that
@@ -245,7 +243,8 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
     }
     if (hstpf__refine_on_grid(f)) {
         const uint32_t hits = f->m[l].floor_hits;
-        f->grid.theta_sd = (real)hstpf__refine_grid_theta(f, st);
+        hstpf__refine_grid_theta(f);
+        f->grid.theta_sd = (real)hstpf__refine_theta_sd(f, st);
         model_step(f, &f->m[l], st);
         f->grid.theta_sd = 0;
         if (f->m[l].floor_hits == hits) {
@@ -253,7 +252,7 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
         }
     }
     if (st->has_y && missed == f->cfg.n_models) {
-        for (l = 0; l < n_grids(f); ++l) {
+        for (l = 0; l < n_grids(&f->cfg); ++l) {
             f->m[l].loglik = 0;
         }
     }
@@ -262,7 +261,7 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 static void shift(hstpf_t *f, real d)
 {
     uint16_t l;
-    for (l = 0; l < n_grids(f); ++l) {
+    for (l = 0; l < n_grids(&f->cfg); ++l) {
         f->grid.geom[l][0] -= d;
         f->m[l].s_mean -= d;
         f->m[l].kx[0] -= (double)d; /* the yardstick's, if it runs */
@@ -271,14 +270,14 @@ static void shift(hstpf_t *f, real d)
 
 static size_t ws_bytes(const hstpf_config_t *c)
 {
-    return HSTPF_GRID_WS_BYTES(c->n_models + (hstpf__refine_grid_cfg(c) ? 1u : 0u));
+    return HSTPF_GRID_WS_BYTES(n_grids(c));
 }
 
 /* The layout HSTPF_GRID_WS_BYTES counts: each model's cells, the
  * transported grid, the saved cells, each model's mass at rest. */
 static void attach(hstpf_t *f, void *ws)
 {
-    const size_t nm = n_grids(f);
+    const size_t nm = n_grids(&f->cfg);
     real *r = (real *)ws;
     f->grid.p = (real(*)[NS * NV])(void *)r;
     r += nm * NS * NV;

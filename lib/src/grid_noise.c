@@ -75,31 +75,42 @@ static void conv_row(real *restrict o, real *restrict pad, const real *ks, int n
     memcpy(o, acc, sizeof acc);
 }
 
-/* refine = 2's grid: its speeds spread by N(0, theta_sd^2) too (theta's
- * uncertainty, refine.c), through work; what would go below the box is
- * dropped (it scores as mass the prediction lost). */
-static void theta_spread(hstpf_t *f, real *p, const real *ng)
+/* Rows r0..r1 of p from the rows b0..b1 of w (the others hold no mass):
+ * p row j = sum_k k[k] w row (j - m0 - k), the taps in order, each row
+ * kept in a local array across the taps. */
+static void speed_conv(real *p, const real *w, const real *k, int nk, int m0, int b0, int b1, int r0, int r1)
 {
-    real *w = f->grid.work, *k = f->grid.kv;
-    int m0, nk, j, t, i;
-    nk = hstpf__grid_kernel(&f->unit, f->grid.theta_sd, ng[3], NV - 1, f->grid.tail, k, &m0);
-    if (nk == 1 && m0 == 0) {
-        return;
-    }
-    memcpy(w, p, sizeof(real) * (size_t)(NS * NV));
-    for (j = 0; j < NV; ++j) { /* p row j = sum_t k[t] w row (j - m0 - t) */
+    int j, t, i;
+    for (j = r0; j <= r1; ++j) {
+        /* the taps whose source row lies in b0..b1 */
+        const int t0 = j - m0 - b1 > 0 ? j - m0 - b1 : 0;
+        const int t1 = j - m0 - b0 < nk - 1 ? j - m0 - b0 : nk - 1;
         real acc[NS];
         for (i = 0; i < NS; ++i) {
             acc[i] = 0;
         }
-        for (t = 0; t < nk; ++t) {
-            const int src = j - m0 - t;
-            if (src >= 0 && src < NV && k[t] > (real)0) {
-                hstpf__grid_axpy_row(acc, w + src * NS, k[t]);
+        for (t = t0; t <= t1; ++t) {
+            const real c = k[t];
+            if (c > (real)0) {
+                hstpf__grid_axpy_row(acc, w + (j - m0 - t) * NS, c);
             }
         }
         memcpy(p + j * NS, acc, sizeof acc);
     }
+}
+
+/* refine = 2's grid: its speeds spread by N(0, theta_sd^2) too (theta's
+ * uncertainty, refine.c), through work; what would go below or above the
+ * box is dropped (it scores as mass the prediction lost). */
+static void theta_spread(hstpf_t *f, real *p, const real *ng)
+{
+    int m0;
+    const int nk = hstpf__grid_kernel(&f->unit, f->grid.theta_sd, ng[3], NV - 1, f->grid.tail, f->grid.kv, &m0);
+    if (nk == 1 && m0 == 0) {
+        return;
+    }
+    memcpy(f->grid.work, p, sizeof(real) * (size_t)(NS * NV));
+    speed_conv(p, f->grid.work, f->grid.kv, nk, m0, 0, NV - 1, 0, NV - 1);
 }
 
 /* Step 3: speed noise from work into p (what it would take below 0 goes to
@@ -121,22 +132,7 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
         r1 = r1 > NV - 1 ? NV - 1 : r1;
         c0 = box[2];
         c1 = box[3];
-        for (j = r0; j <= r1; ++j) { /* p row j = sum_k kv[k] w row (j - m0v - k) */
-            /* the taps whose source row lies in the box */
-            const int k0 = j - m0v - box[1] > 0 ? j - m0v - box[1] : 0;
-            const int k1 = j - m0v - box[0] < nkv - 1 ? j - m0v - box[0] : nkv - 1;
-            real acc[NS]; /* the row in registers across the taps */
-            for (i = 0; i < NS; ++i) {
-                acc[i] = 0;
-            }
-            for (k = k0; k <= k1; ++k) {
-                const real c = kv[k];
-                if (c > (real)0) {
-                    hstpf__grid_axpy_row(acc, w + (j - m0v - k) * NS, c);
-                }
-            }
-            memcpy(p + j * NS, acc, sizeof acc);
-        }
+        speed_conv(p, w, kv, nkv, m0v, box[0], box[1], r0, r1);
         if (ng[2] <= (real)0) { /* the box starts at 0: what falls below is at rest */
             for (j = box[0]; j <= box[1]; ++j) {
                 const real *r = w + j * NS;

@@ -30,6 +30,15 @@ static inline uint16_t hstpf__leading_row(const hstpf_t *f)
     return best;
 }
 
+/* A model's deterministic acceleration terms from (c0, c1, c2) in N/kN:
+ * a = xi u - k0 - k1 v - k2 v^2 with v in m/s. */
+static inline void hstpf__model_set_theta(const hstpf_t *f, hstpf_model_t *m, double c0, double c1, double c2)
+{
+    m->k0 = (hstpf_real_t)(f->xi * c0);
+    m->k1 = (hstpf_real_t)(f->xi * c1 * 3.6);
+    m->k2 = (hstpf_real_t)(f->xi * c2 * 12.96);
+}
+
 /* 1 when noise_s, noise_v and noise_e are all Gaussian. */
 int hstpf__all_gaussian(const hstpf_config_t *c);
 

@@ -105,7 +105,7 @@ void hstpf__models_reacquire(hstpf_t *f, real yr)
     for (l = 0; l < f->cfg.n_models; ++l) {
         vb += wb[l] * (double)f->m[l].v_mean;
     }
-    for (l = 0; l < f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1 : 0); ++l) {
+    for (l = 0; l < f->cfg.n_models + hstpf__refine_on_grid(f); ++l) {
         hstpf_model_t *m = &f->m[l];
         if (m->floor_run >= f->cfg.model_reacquire_after) {
             hstpf__acq_t q;

@@ -252,20 +252,19 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
  * slow down more than its mean says (an unmodelled climb), which no row
  * can. The gain k (fixed at 1 by default) scales the traction in the EKF
  * only. */
-double hstpf__refine_grid_theta(hstpf_t *f, const hstpf__step_t *st)
+void hstpf__refine_grid_theta(hstpf_t *f)
 {
-    hstpf_model_t *m = &f->m[f->cfg.n_models];
-    const double *z = f->rf.kz, *p = f->rf.kp;
-    const double c0 = z[2] > 0.0 ? z[2] : 0.0, c1 = z[3] > 0.0 ? z[3] : 0.0, c2 = z[4] > 0.0 ? z[4] : 0.0;
-    const double vk = 3.6 * (double)m->v_mean;
+    const double *z = f->rf.kz;
+    hstpf__model_set_theta(f, &f->m[f->cfg.n_models], z[2] > 0.0 ? z[2] : 0.0, z[3] > 0.0 ? z[3] : 0.0,
+                           z[4] > 0.0 ? z[4] : 0.0);
+}
+
+double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st)
+{
+    const double *p = f->rf.kp;
+    const double vk = 3.6 * (double)f->m[f->cfg.n_models].v_mean;
     double g[4], var = 0.0;
     int i, j;
-    m->k0 = (hstpf_real_t)(f->xi * c0);
-    m->k1 = (hstpf_real_t)(f->xi * c1 * 3.6);
-    m->k2 = (hstpf_real_t)(f->xi * c2 * 12.96);
-    if (st == NULL) {
-        return 0.0;
-    }
     /* a = k xu - xi (c0 + c1 V + c2 V^2) - g: its gradient in (c0, c1, c2, k) */
     g[0] = -f->xi;
     g[1] = -f->xi * vk;

@@ -23,7 +23,7 @@ static inline int hstpf__refine_grid_cfg(const hstpf_config_t *c)
 }
 static inline int hstpf__refine_on_grid(const hstpf_t *f)
 {
-    return f->rf.active && f->engine == (uint8_t)HSTPF_ENGINE_GRID && f->cfg.refine == 2u;
+    return f->engine == (uint8_t)HSTPF_ENGINE_GRID && hstpf__refine_grid_cfg(&f->cfg);
 }
 
 /* Otherwise, on an engine whose likelihoods are not Kalman filters' (the
@@ -35,9 +35,12 @@ static inline int hstpf__refine_yardstick(const hstpf_t *f)
 }
 
 /* refine = 2 on the grid: its grid model's resistance from the EKF's
- * theta; returns the sd of the speed change over the step st (if not
- * NULL) that theta's uncertainty adds, for the grid to spread by. */
-double hstpf__refine_grid_theta(hstpf_t *f, const hstpf__step_t *st);
+ * theta (each coefficient >= 0). */
+void hstpf__refine_grid_theta(hstpf_t *f);
+
+/* The sd of the speed change over the step st that theta's uncertainty
+ * adds, for that grid to spread by. */
+double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st);
 
 /* The hypothesis' (s, v) mean and variances as published: its grid
  * model's with refine = 2 on the grid, else the EKF's. */

@@ -291,7 +291,8 @@ static void test_refine2_grid(void **state)
     memset(&st, 0, sizeof st);
     st.dt = 1.0;
     st.xu = 0.3;
-    sd = hstpf__refine_grid_theta(&f, &st);
+    hstpf__refine_grid_theta(&f);
+    sd = hstpf__refine_theta_sd(&f, &st);
     TU_CLOSE(sd, 2.0 * f.xi * sqrt(0.03), 1e-9);
     TU_CLOSE((double)mh->k0, f.xi * 1.0, 1e-6 * f.xi);
     TU_CLOSE((double)mh->k1, f.xi * 0.01 * 3.6, 1e-6 * f.xi);
