@@ -380,11 +380,8 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         hstpf__refine_update(f, &st);
         if (hstpf__refine_yardstick(f)) {
             hstpf__refine_anchor(f, &st);
-        } else if (hstpf__refine_on_grid(f)) { /* scored by its grid, not the EKF */
-            const hstpf_model_t *mh = &f->m[f->cfg.n_models];
-            f->rf.loglik = (double)mh->loglik;
-            f->rf.floored = (uint8_t)(st.has_y && mh->floor_run > 0u);
-            f->rf.held = mh->held;
+        } else if (hstpf__refine_on_grid(f)) {
+            hstpf__refine_from_grid(f, &st);
         }
     }
     {

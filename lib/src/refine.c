@@ -278,6 +278,14 @@ double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st)
     return var > 0.0 ? THETA_PERSIST * st->dt * sqrt(var) : 0.0;
 }
 
+void hstpf__refine_from_grid(hstpf_t *f, const hstpf__step_t *st)
+{
+    const hstpf_model_t *mh = &f->m[f->cfg.n_models];
+    f->rf.loglik = (double)mh->loglik;
+    f->rf.floored = (uint8_t)(st->has_y && mh->floor_run > 0u);
+    f->rf.held = mh->held;
+}
+
 void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv)
 {
     if (hstpf__refine_on_grid(f)) {

@@ -42,6 +42,11 @@ void hstpf__refine_grid_theta(hstpf_t *f);
  * adds, for that grid to spread by. */
 double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st);
 
+/* refine = 2 on the grid, after the engine's step and
+ * hstpf__refine_update: the hypothesis is scored by its grid (its
+ * likelihood, floor and rest), not by the EKF. */
+void hstpf__refine_from_grid(hstpf_t *f, const hstpf__step_t *st);
+
 /* The hypothesis' (s, v) mean and variances as published: its grid
  * model's with refine = 2 on the grid, else the EKF's. */
 void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv);

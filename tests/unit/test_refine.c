@@ -1,8 +1,8 @@
 /* The continuous-theta hypothesis (cfg.refine, issue 10): the W(v) band by
  * hand, no "no type fits" for a train that is on the table, and "no type
  * fits" for an unmodelled 20 per-mille gradient (Case 1 noise, Student-t
- * fixes, and Case 2 with refine = 2), and the hypothesis switched off; the simulator's journey
- * (five stations) with Case 1 noise. */
+ * fixes, and Case 2 with refine = 2), and the hypothesis switched off; the
+ * simulator's journey (five stations). */
 #include <string.h>
 
 #include "hstpf_sim.h"
@@ -153,16 +153,15 @@ static void test_declared_band(void **state)
 /* An unmodelled 20 per-mille climb adds 20 N/kN to every row's W: no row
  * fits, the continuous hypothesis takes the weight, no type is declared, and
  * the refined theta carries the offset (W(0) well above every row's c0).
- * heavy: on the grid engine with Student-t fixes (1) or Case 2 noise (2,
- * with refine = 2). */
-static void check_climb(int heavy)
+ * heavy: on the grid engine with Student-t fixes (1) or Case 2 noise (2). */
+static void check_climb(int heavy, uint8_t refine)
 {
     static const hstpf_track_seg_t climb[] = {{0.0, 20.0, 0.0}};
     const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
     hstpf_estimate_t e;
     int nofit;
     double w, sd;
-    run_line_noise(&truth, climb, 1, 4, heavy, heavy == 2 ? 2u : 1u, &e, &nofit);
+    run_line_noise(&truth, climb, 1, 4, heavy, refine, &e, &nofit);
     assert_int_equal(nofit, 1);
     assert_int_equal(e.fit, HSTPF_FIT_NONE);
     assert_true(e.q_offtable > 0.99f);
@@ -174,7 +173,7 @@ static void check_climb(int heavy)
 static void test_gradient_no_fit(void **state)
 {
     (void)state;
-    check_climb(0);
+    check_climb(0, 1);
 }
 
 /* On the table no "no type fits" and little weight off the table; then
@@ -187,7 +186,7 @@ static void check_table_and_climb(int heavy, uint8_t refine)
     run_line_noise(&truth, NULL, 0, 3, heavy, refine, &e, &nofit);
     assert_int_equal(nofit, 0);
     assert_true(e.q_offtable < 0.05f);
-    check_climb(heavy);
+    check_climb(heavy, refine);
 }
 
 /* On the grid engine with Student-t position noise, where the hypothesis
