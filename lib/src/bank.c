@@ -89,6 +89,14 @@ static void reset_state(hstpf_t *f)
     f->lost_run = 0;
 }
 
+/* The quantile part of spec's tables into q, built in de's place (its
+ * log-density is not kept: nothing evaluates this noise's density). */
+static void init_quantiles(hstpf_t *f, hstpf_dist_quantiles_t *q, const hstpf_dist_spec_t *spec)
+{
+    (void)hstpf_dist_init(&f->de, spec);
+    *q = f->de.qt;
+}
+
 /* Noise tables; the specs were checked, so these cannot fail. */
 static void init_tables(hstpf_t *f, const hstpf_config_t *cfg)
 {
@@ -97,8 +105,9 @@ static void init_tables(hstpf_t *f, const hstpf_config_t *cfg)
     memset(&unit, 0, sizeof unit);
     unit.kind = HSTPF_DIST_GAUSSIAN;
     unit.sd = 1.0;
-    (void)hstpf_dist_init(&f->ds, &cfg->noise_s);
-    (void)hstpf_dist_init(&f->dv, &cfg->noise_v);
+    init_quantiles(f, &f->ds, &cfg->noise_s);
+    init_quantiles(f, &f->dv, &cfg->noise_v);
+    init_quantiles(f, &f->unit, &unit);
     if (cfg->e_blur_sd > 0.0 && particles && cfg->noise_e.kind == HSTPF_DIST_GAUSSIAN) {
         /* a blurred Gaussian is a wider Gaussian (the first fix draws from it too) */
         hstpf_dist_spec_t e2 = cfg->noise_e;
@@ -110,10 +119,9 @@ static void init_tables(hstpf_t *f, const hstpf_config_t *cfg)
             (void)hstpf__dist_blur(&f->de, &cfg->noise_e, cfg->e_blur_sd);
         }
     }
-    (void)hstpf_dist_init(&f->unit, &unit);
     { /* the moments the Kalman filters use: exact for every kind */
         const hstpf_dist_spec_t *sp[3] = {&cfg->noise_s, &cfg->noise_v, &cfg->noise_e};
-        const hstpf_dist_t *d[3] = {&f->ds, &f->dv, &f->de};
+        const hstpf_dist_quantiles_t *d[3] = {&f->ds, &f->dv, &f->de.qt};
         int i;
         for (i = 0; i < 3; ++i) {
             const int g = sp[i]->kind == HSTPF_DIST_GAUSSIAN;

@@ -265,15 +265,15 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *sp)
     /* inverse CDF: body nodes, then the two geometric tail tables */
     for (i = 1; i < HSTPF_DIST_QN; ++i) {
         const double u = (double)i / (double)HSTPF_DIST_QN;
-        d->q[i] = (hstpf_real_t)(u <= 0.5 ? hstpf__dist_quantile(sp, mass, u, 0) : hstpf__dist_quantile(sp, mass, 1.0 - u, 1));
+        d->qt.q[i] = (hstpf_real_t)(u <= 0.5 ? hstpf__dist_quantile(sp, mass, u, 0) : hstpf__dist_quantile(sp, mass, 1.0 - u, 1));
     }
     for (k = 0; k < HSTPF_DIST_TAILN; ++k) {
         const double p = ldexp(1.0, k - 32);
-        d->tail_lo[k] = (hstpf_real_t)hstpf__dist_quantile(sp, mass, p, 0);
-        d->tail_hi[k] = (hstpf_real_t)hstpf__dist_quantile(sp, mass, p, 1);
+        d->qt.tail_lo[k] = (hstpf_real_t)hstpf__dist_quantile(sp, mass, p, 0);
+        d->qt.tail_hi[k] = (hstpf_real_t)hstpf__dist_quantile(sp, mass, p, 1);
     }
-    d->q[0] = d->tail_lo[0];
-    d->q[HSTPF_DIST_QN] = d->tail_hi[0];
+    d->qt.q[0] = d->qt.tail_lo[0];
+    d->qt.q[HSTPF_DIST_QN] = d->qt.tail_hi[0];
 
     /* log-density grid over the body, and the tails beyond it */
     switch (sp->kind) {
@@ -360,8 +360,8 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *sp)
             d->tail_c[k] = sp->edge_soft > 0.0 ? (hstpf_real_t)(-0.5 / (sp->edge_soft * sp->edge_soft)) : (hstpf_real_t)0;
         }
     }
-    d->mean = (hstpf_real_t)mean;
-    d->sd = (hstpf_real_t)sqrt(var > 0.0 ? var : 0.0);
+    d->qt.mean = (hstpf_real_t)mean;
+    d->qt.sd = (hstpf_real_t)sqrt(var > 0.0 ? var : 0.0);
     d->floor_slope = (hstpf_real_t)(var > 0.0 ? 1.0 / sqrt(var) : 1.0 / dx);
     d->dd_max = (hstpf_real_t)(1e4 * (var > 0.0 ? sqrt(var) : dx));
     return HSTPF_OK;
@@ -369,7 +369,7 @@ int32_t hstpf_dist_init(hstpf_dist_t *d, const hstpf_dist_spec_t *sp)
 
 hstpf_real_t hstpf_dist_sample(const hstpf_dist_t *d, uint32_t r)
 {
-    return hstpf__dist_sample(d, r);
+    return hstpf__dist_sample(&d->qt, r);
 }
 
 hstpf_real_t hstpf_dist_logpdf(const hstpf_dist_t *d, hstpf_real_t x)

@@ -134,7 +134,7 @@ int32_t hstpf__dist_blur(hstpf_dist_t *d, const hstpf_dist_spec_t *sp, double sd
     d->tail_b[1] = (hstpf_real_t)(slope < 0.0 ? slope : 0.0);
     d->tail_c[1] = 0;
     var = k * th * th + q.sd * q.sd;
-    d->sd = (hstpf_real_t)sqrt(var);
+    d->qt.sd = (hstpf_real_t)sqrt(var);
     d->floor_slope = (hstpf_real_t)(1.0 / sqrt(var));
     d->dd_max = (hstpf_real_t)(1e4 * sqrt(var));
     return HSTPF_OK;

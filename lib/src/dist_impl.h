@@ -51,7 +51,7 @@ static inline hstpf_real_t hstpf__dist_tail(const hstpf_real_t *tab, uint32_t t)
     return tab[k] + frac * (tab[k + 1] - tab[k]);
 }
 
-static inline hstpf_real_t hstpf__dist_sample(const hstpf_dist_t *d, uint32_t r)
+static inline hstpf_real_t hstpf__dist_sample(const hstpf_dist_quantiles_t *d, uint32_t r)
 {
     const uint32_t b = r >> HSTPF__QSHIFT;
     hstpf_real_t f;

@@ -23,10 +23,10 @@ static int paired_bank(const hstpf_t *f)
  * speed prior) into nz_v. */
 static void draw_fix(hstpf_t *f, hstpf_rng_t *rng, int two)
 {
-    const hstpf_dist_t *d2 = two ? &f->de : &f->unit;
+    const hstpf_dist_quantiles_t *d2 = two ? &f->de.qt : &f->unit;
     uint16_t i;
     for (i = 0; i < f->cfg.n_particles; ++i) {
-        f->nz_s[i] = hstpf__dist_sample(&f->de, hstpf__rng_next(rng));
+        f->nz_s[i] = hstpf__dist_sample(&f->de.qt, hstpf__rng_next(rng));
         f->nz_v[i] = hstpf__dist_sample(d2, hstpf__rng_next(rng));
     }
 }

@@ -88,11 +88,11 @@ static inline void hstpf__grid_axpy_row(real *restrict o, const real *restrict r
 /* ---- grid_cdf.c: a built distribution over intervals ------------------ */
 
 /* P(X <= x) into *lo and P(X > x) into *hi, each on its own side. */
-void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi);
+void hstpf__grid_cdf2(const hstpf_dist_quantiles_t *d, real x, real *lo, real *hi);
 /* P(a < X <= b), a <= b, from the quantile tables (the sampler's CDF). */
-real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b);
+real hstpf__grid_prob_in(const hstpf_dist_quantiles_t *d, real a, real b);
 /* The quantile at tail (upper = 0) or 1 - tail. */
-real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper, real tail);
+real hstpf__grid_tail_quantile(const hstpf_dist_quantiles_t *d, int upper, real tail);
 /* Log of the mean density of d over [a, b], a < b; -3e38 for zero. */
 real hstpf__grid_cell_loglik(const hstpf_dist_t *d, real a, real b);
 
@@ -129,7 +129,7 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
 /* The cell masses of the noise scale * X on cells of width h, between its
  * tail quantiles and within +-reach cells: k[0..n), first offset *m0;
  * returns n. */
-int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real tail, real *k, int *m0);
+int hstpf__grid_kernel(const hstpf_dist_quantiles_t *d, real scale, real h, int reach, real tail, real *k, int *m0);
 /* The process noise convolved into model l's cells from f->grid.work. */
 void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng);
 

@@ -20,7 +20,7 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     const hstpf_config_t *c = &f->cfg;
     real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
     const real y2 = (real)q->y2, y1 = (real)q->y1, t = (real)q->t12;
-    const real el = hstpf__grid_tail_quantile(&f->de, 0, GRID_TAIL), eh = hstpf__grid_tail_quantile(&f->de, 1, GRID_TAIL);
+    const real el = hstpf__grid_tail_quantile(&f->de.qt, 0, GRID_TAIL), eh = hstpf__grid_tail_quantile(&f->de.qt, 1, GRID_TAIL);
     real s_lo = y2 - eh, s_hi = y2 - el, v_lo, v_hi, tot = 0, cs = 0, mus = 0, sdv = 0;
     const real v0 = (real)q->v0;
     int i, j;
@@ -41,13 +41,13 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
     hstpf__grid_geometry(s_lo, s_hi, v_lo, v_hi, g);
     for (i = 0; i < NS; ++i) { /* e2 in [y2 - right edge, y2 - left edge] */
         const real x0 = g[0] + (real)i * g[1], sc_i = x0 + (real)0.5 * g[1];
-        const real ps = hstpf__grid_prob_in(&f->de, y2 - (x0 + g[1]), y2 - x0);
+        const real ps = hstpf__grid_prob_in(&f->de.qt, y2 - (x0 + g[1]), y2 - x0);
         real below;
         for (j = 0; j < NV; ++j) {
             const real w0 = g[2] + (real)j * g[3], w1 = w0 + g[3];
             real pv;
             if (t > (real)0) {
-                pv = hstpf__grid_prob_in(&f->de, t * (w0 - cs) - sc_i + y1 + mus, t * (w1 - cs) - sc_i + y1 + mus);
+                pv = hstpf__grid_prob_in(&f->de.qt, t * (w0 - cs) - sc_i + y1 + mus, t * (w1 - cs) - sc_i + y1 + mus);
             } else if (sdv > (real)0) {
                 pv = hstpf__grid_prob_in(&f->unit, (w0 - v0) / sdv, (w1 - v0) / sdv);
             } else {
@@ -60,7 +60,7 @@ void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         if (g[2] > (real)0) {
             below = 0;
         } else if (t > (real)0) {
-            below = hstpf__grid_prob_in(&f->de, (real)-3e38, t * (-cs) - sc_i + y1 + mus);
+            below = hstpf__grid_prob_in(&f->de.qt, (real)-3e38, t * (-cs) - sc_i + y1 + mus);
         } else if (sdv > (real)0) {
             below = hstpf__grid_prob_in(&f->unit, (real)-3e38, -v0 / sdv);
         } else {

@@ -33,7 +33,7 @@ static real conv_bin(const real *hist, int n, const real *k, int nk, int b)
  * predicted marginal. Output bin b covers x0 + (b + m0) h .. + h. With conv
  * (n + nk - 1 values) every bin is computed and kept there, for the
  * posterior box; without, only the bins the two scans reach. */
-static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_t *d, real scale, real tail,
+static int noisy_quantiles(const real *hist, int n, real x0, real h, const hstpf_dist_quantiles_t *d, real scale, real tail,
                            real cut_lo, real cut_hi, real *k, int *m0_out, real *lo, real *hi, real *conv)
 {
     int m0, nk, b;
@@ -282,7 +282,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
     int16_t *first = f->grid.first, *last = f->grid.last;
     real tot = 0, rtot = 0, thr, s_lo = (real)3e38, s_hi = (real)-3e38, v_lo = (real)3e38,
          v_hi = (real)-3e38;
-    const real mid = yr - hstpf__dist_sample(&f->de, 0x80000000u); /* y less e's median */
+    const real mid = yr - hstpf__dist_sample(&f->de.qt, 0x80000000u); /* y less e's median */
     const real a0 = acc - m->k0;                                   /* net acceleration at rest */
     const real rest_v = a0 > (real)0 ? dt * a0 : (real)-1;         /* < 0: the rest mass is held */
     int i, j, any = 0, held;
@@ -355,7 +355,7 @@ void hstpf__grid_new_box(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real dt
          * the posterior out of it: the box reaches to the measurement's
          * 1 %..99 % range, or the model could never catch up */
         if (mid < s_lo || mid > s_hi) {
-            const real e_hi = hstpf__dist_sample(&f->de, 0xFD70A3D7u), e_lo = hstpf__dist_sample(&f->de, 0x028F5C29u);
+            const real e_hi = hstpf__dist_sample(&f->de.qt, 0xFD70A3D7u), e_lo = hstpf__dist_sample(&f->de.qt, 0x028F5C29u);
             s_lo = yr - e_hi < s_lo ? yr - e_hi : s_lo;
             s_hi = yr - e_lo > s_hi ? yr - e_lo : s_hi;
         }

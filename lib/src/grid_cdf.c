@@ -50,7 +50,7 @@ static real tail_prob(const real *tab, real x, int dir)
 /* P(X <= x) into *lo and P(X > x) into *hi, each computed on its own side
  * so that neither loses the small tail to round-off. Consistent with the
  * sampler: the exact probability at every quantile node, linear between. */
-void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
+void hstpf__grid_cdf2(const hstpf_dist_quantiles_t *d, real x, real *lo, real *hi)
 {
     int a = 1, b = QN - 1;
     real u;
@@ -82,7 +82,7 @@ void hstpf__grid_cdf2(const hstpf_dist_t *d, real x, real *lo, real *hi)
 }
 
 /* P(a < X <= b), a <= b. */
-real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b)
+real hstpf__grid_prob_in(const hstpf_dist_quantiles_t *d, real a, real b)
 {
     real la, ha, lb, hb, p;
     hstpf__grid_cdf2(d, a, &la, &ha);
@@ -93,7 +93,7 @@ real hstpf__grid_prob_in(const hstpf_dist_t *d, real a, real b)
 
 /* Quantile at probability tail (upper = 0) or 1 - tail: the sampler's own
  * inverse CDF at that point. */
-real hstpf__grid_tail_quantile(const hstpf_dist_t *d, int upper, real tail)
+real hstpf__grid_tail_quantile(const hstpf_dist_quantiles_t *d, int upper, real tail)
 {
     const uint32_t r = (uint32_t)(tail * (real)4294967296.0);
     return hstpf__dist_sample(d, upper ? ~r : r);
@@ -153,7 +153,7 @@ static real dens_int(const hstpf_dist_t *d, real a, real b)
  * accuracy holds where a CDF difference would cancel. -3e38 for zero. */
 real hstpf__grid_cell_loglik(const hstpf_dist_t *d, real a, real b)
 {
-    const real pm = hstpf__grid_prob_in(d, a, b);
+    const real pm = hstpf__grid_prob_in(&d->qt, a, b);
     real dens;
     if (pm > (real)1e-5) {
         return hstpf__log_pos(pm / (b - a));

@@ -9,7 +9,7 @@
  * cell m) / P(noise within its tail quantiles), for the offsets m in
  * [m0, m0 + n) that lie within +-reach cells (farther ones cannot land on
  * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
-int hstpf__grid_kernel(const hstpf_dist_t *d, real scale, real h, int reach, real tail, real *k, int *m0)
+int hstpf__grid_kernel(const hstpf_dist_quantiles_t *d, real scale, real h, int reach, real tail, real *k, int *m0)
 {
     const real lo = scale * hstpf__grid_tail_quantile(d, 0, tail) / h;
     const real hi = scale * hstpf__grid_tail_quantile(d, 1, tail) / h;

@@ -639,8 +639,8 @@ static void test_table_sliver(void **state)
     sp.table_p = p;
     sp.table_n = 3;
     assert_int_equal(hstpf_dist_init(&d, &sp), HSTPF_OK);
-    assert_true(isfinite((double)d.sd) && d.sd >= 0 && (double)d.sd < 1e-3);
-    assert_float_equal((double)d.mean, 1000.0, 1e-3);
+    assert_true(isfinite((double)d.qt.sd) && d.qt.sd >= 0 && (double)d.qt.sd < 1e-3);
+    assert_float_equal((double)d.qt.mean, 1000.0, 1e-3);
     for (r = 0; r < 64; ++r) {
         const double v = (double)hstpf_dist_sample(&d, r * 67108864u + 12345u);
         assert_float_equal(v, 1000.0, 2e-4);

@@ -334,12 +334,12 @@ static void sampler_moments(const hstpf_dist_t *d, double *mean, double *var)
 /* Drawn samples (hstpf_dist_sample(d, hstpf_rng_next(&rng))), three seeds,
  * N = 1e5 each, every check at alpha = 0.001:
  *  - KS against the exact CDF: D < c(0.001)/sqrt(N) + 2e-3;
- *  - sample mean against d->mean within 3.29 sd / sqrt(N), sample variance
- *    against d->sd^2 within 3.29 sd^2 sqrt((kurtosis - 1) / N) (the
+ *  - sample mean against d->qt.mean within 3.29 sd / sqrt(N), sample variance
+ *    against d->qt.sd^2 within 3.29 sd^2 sqrt((kurtosis - 1) / N) (the
  *    standard error of a sample variance; kurtosis exact, by hand);
  *  - the same against the exact moments mu_T, var_T of what the sampler
  *    implements (above): a sharper check of the sampling path itself;
- *  - d->mean and d->sd equal the exact moments up to float rounding.
+ *  - d->qt.mean and d->qt.sd equal the exact moments up to float rounding.
  * The table's own moment bias (mu_T - mean, sd_T / sd) is printed: dist.h
  * states no bound for it, so it is reported, not asserted. */
 static void test_samples(void **state)
@@ -356,8 +356,8 @@ static void test_samples(void **state)
         const double sd = sqrt(cs->var);
         double mu_t, var_t;
         build(&d, &cs->spec);
-        TU_CLOSE(d.mean, cs->mean, 4.0 * TU_REAL_EPS * (fabs(cs->mean) + sd));
-        TU_CLOSE(d.sd, sd, 4.0 * TU_REAL_EPS * sd);
+        TU_CLOSE(d.qt.mean, cs->mean, 4.0 * TU_REAL_EPS * (fabs(cs->mean) + sd));
+        TU_CLOSE(d.qt.sd, sd, 4.0 * TU_REAL_EPS * sd);
         sampler_moments(&d, &mu_t, &var_t);
         print_message("%-24s table sampler: mean bias %+.2e sd, sd ratio %.5f\n", cs->name,
                       (mu_t - cs->mean) / sd, sqrt(var_t) / sd);
@@ -375,8 +375,8 @@ static void test_samples(void **state)
                 v += (x[i] - m) * (x[i] - m);
             }
             v /= (N - 1);
-            TU_CLOSE(m, d.mean, Z_ALPHA * sd / sqrt((double)N));
-            TU_CLOSE(v, (double)d.sd * (double)d.sd, Z_ALPHA * cs->var * sqrt((cs->kurt - 1.0) / N));
+            TU_CLOSE(m, d.qt.mean, Z_ALPHA * sd / sqrt((double)N));
+            TU_CLOSE(v, (double)d.qt.sd * (double)d.qt.sd, Z_ALPHA * cs->var * sqrt((cs->kurt - 1.0) / N));
             TU_CLOSE(m, mu_t, Z_ALPHA * sqrt(var_t / N));
             TU_CLOSE(v, var_t, Z_ALPHA * var_t * sqrt((cs->kurt - 1.0) / N));
             ks = tu_ks_one_sample(x, N, exact_cdf, &cs->spec, ks_x_min(&cs->spec));
@@ -869,7 +869,7 @@ static void test_init_errors(void **state)
     s = m, s.mean = nan, s.sd = -1.0, expect_init(&s, HSTPF_OK, "gamma ignores others");
     /* and a good init after errors works */
     assert_int_equal(hstpf_dist_init(&d, &g), HSTPF_OK);
-    TU_CLOSE(d.sd, 1.0, 1e-6);
+    TU_CLOSE(d.qt.sd, 1.0, 1e-6);
 }
 
 /* ---- ranges and bounded work (issue 11) -------------------------------- */
@@ -879,19 +879,19 @@ static void assert_all_finite(const hstpf_dist_t *d, const char *what)
 {
     unsigned i;
     const hstpf_real_t one[] = {d->lo, d->dx, d->inv_dx, d->tail_b[0], d->tail_b[1], d->tail_c[0],
-                                d->tail_c[1], d->floor, d->floor_slope, d->dd_max, d->lp_max, d->mean, d->sd};
+                                d->tail_c[1], d->floor, d->floor_slope, d->dd_max, d->lp_max, d->qt.mean, d->qt.sd};
     for (i = 0; i < sizeof one / sizeof one[0]; ++i) {
         if (!isfinite((double)one[i])) {
             fail_msg("%s: member %u is %g", what, i, (double)one[i]);
         }
     }
     for (i = 0; i <= HSTPF_DIST_QN; ++i) {
-        if (!isfinite((double)d->q[i])) {
-            fail_msg("%s: q[%u] = %g", what, i, (double)d->q[i]);
+        if (!isfinite((double)d->qt.q[i])) {
+            fail_msg("%s: q[%u] = %g", what, i, (double)d->qt.q[i]);
         }
     }
     for (i = 0; i < HSTPF_DIST_TAILN; ++i) {
-        if (!isfinite((double)d->tail_lo[i]) || !isfinite((double)d->tail_hi[i])) {
+        if (!isfinite((double)d->qt.tail_lo[i]) || !isfinite((double)d->qt.tail_hi[i])) {
             fail_msg("%s: tail %u not finite", what, i);
         }
     }
@@ -1009,10 +1009,10 @@ static void test_gamma_small_scale(void **state)
     }
     gamma_spec(&s, 2.0, 1e-3, 0.0);
     assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
-    TU_CLOSE(d.q[HSTPF_DIST_QN / 2], 1e-3 * a, 1e-3 * a * 1e-5);
+    TU_CLOSE(d.qt.q[HSTPF_DIST_QN / 2], 1e-3 * a, 1e-3 * a * 1e-5);
     gamma_spec(&s, 1e4, 1e-3, 5.0);
     assert_int_equal(hstpf_dist_init(&d, &s), HSTPF_OK);
-    TU_CLOSE(d.q[HSTPF_DIST_QN / 2], 5.0 + 1e-3 * (1e4 - 1.0 / 3.0 + 8.0 / 4.05e6), 1e-5);
+    TU_CLOSE(d.qt.q[HSTPF_DIST_QN / 2], 5.0 + 1e-3 * (1e4 - 1.0 / 3.0 + 8.0 / 4.05e6), 1e-5);
 }
 
 /* The blur's quadrature: bounded time and finite tables whatever scale /

@@ -128,7 +128,7 @@ static void test_cdf_tails(void **state)
     for (g = 0; g < 2; ++g) {
         build(&d, g);
         for (side = 0; side < 2; ++side) {
-            const hstpf_real_t *tab = side ? d.tail_hi : d.tail_lo;
+            const hstpf_real_t *tab = side ? d.qt.tail_hi : d.qt.tail_lo;
             hstpf_real_t prev = -1;
             for (k = 0; k < HSTPF__QSHIFT; ++k) {
                 const double pk = ldexp(1.0, k - 32);
@@ -137,7 +137,7 @@ static void test_cdf_tails(void **state)
                 if (!(tab[k] != tab[k + 1])) {
                     continue; /* a tie: the node is not the first beyond */
                 }
-                hstpf__grid_cdf2(&d, tab[k], &lo, &hi);
+                hstpf__grid_cdf2(&d.qt, tab[k], &lo, &hi);
                 p = side ? hi : lo;
                 if (!((double)p == pk)) {
                     fail_msg("%s, %s tail node %d: %.9g, not 2^%d", g ? "Gamma(0.5)" : "N(0,1)",
@@ -145,7 +145,7 @@ static void test_cdf_tails(void **state)
                 }
                 for (t = 1; t < 16; ++t) { /* between node k and node k + 1 */
                     const hstpf_real_t x = tab[k] + (tab[k + 1] - tab[k]) * ((hstpf_real_t)t / 16);
-                    hstpf__grid_cdf2(&d, x, &lo, &hi);
+                    hstpf__grid_cdf2(&d.qt, x, &lo, &hi);
                     p = side ? hi : lo;
                     assert_true((double)p >= pk && (double)p <= 2.0 * pk);
                     /* along the sweep away from the tail p never decreases */
@@ -159,7 +159,7 @@ static void test_cdf_tails(void **state)
             }
             {
                 hstpf_real_t lo, hi; /* beyond the outermost node: zero */
-                hstpf__grid_cdf2(&d, side ? tab[0] + 1 : tab[0] - 1, &lo, &hi);
+                hstpf__grid_cdf2(&d.qt, side ? tab[0] + 1 : tab[0] - 1, &lo, &hi);
                 assert_true((side ? hi : lo) == 0);
             }
         }

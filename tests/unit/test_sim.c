@@ -267,8 +267,8 @@ static void test_heavy_table_is_the_density(void **state)
         heavy_setup(kinds[k], &c, &tab);
         assert_int_equal(hstpf_dist_init(&d, &c.noise_e), HSTPF_OK);
         heavy_moments_by_hand(&c.heavy_e, HSTPF_SIM_HEAVY_RANGE, &w0, &w2);
-        TU_CLOSE((double)d.sd, sqrt(w2 / w0), 0.005 * sqrt(w2 / w0));
-        TU_CLOSE((double)d.mean, 0.0, 1e-3);
+        TU_CLOSE((double)d.qt.sd, sqrt(w2 / w0), 0.005 * sqrt(w2 / w0));
+        TU_CLOSE((double)d.qt.mean, 0.0, 1e-3);
         TU_CLOSE((double)hstpf_dist_logpdf(&d, 0.0f), log(hstpf_sim_heavy_pdf(&c.heavy_e, 0.0)), 0.05);
         if (k == 0) {
             TU_CLOSE((double)hstpf_dist_sample(&d, 0xC0000000u), 0.6744897501960817 * sqrt(5.0), 0.0075);

@@ -285,8 +285,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         }
         memset(&cfg.noise_e, 0, sizeof cfg.noise_e);
         cfg.noise_e.kind = HSTPF_DIST_GAUSSIAN;
-        cfg.noise_e.mean = (double)de->mean;
-        cfg.noise_e.sd = (double)de->sd;
+        cfg.noise_e.mean = (double)de->qt.mean;
+        cfg.noise_e.sd = (double)de->qt.sd;
         free(de);
     }
     if (w->st->floor_set) {
@@ -335,7 +335,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         for (k = 0; k < w->n_models; ++k) { /* each model's log-likelihood increment of the step */
             fprintf(trace, ",ll%d", k);
         }
-        fprintf(trace, "\n");
+        fprintf(trace, ",q_off,fit\n"); /* the continuous hypothesis' weight, hstpf_fit_t */
     }
     while (sim.t <= w->sc->duration_s) {
         hstpf_input_t in;
@@ -452,7 +452,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             for (k = 0; k < w->n_models; ++k) {
                 fprintf(trace, ",%.9g", (double)est.model[k].loglik);
             }
-            fprintf(trace, "\n");
+            fprintf(trace, ",%.6g,%d\n", (double)est.q_offtable, (int)est.fit);
         }
     }
     n_after = n_after > 0.0 ? n_after : 1.0;

@@ -97,11 +97,21 @@ typedef struct {
     double edge_soft;
 } hstpf_dist_spec_t;
 
-/** A built distribution. Treat the members as private. */
+/** The quantile part of a built distribution: what sampling and the grid
+ * engine's probabilities over cells use, without the log-density. An
+ * instance keeps only this part of the noises it never evaluates as a
+ * density (the process noises). Treat the members as private. */
 typedef struct {
     hstpf_real_t q[HSTPF_DIST_QN + 1];      /* quantiles at u = i / QN */
     hstpf_real_t tail_lo[HSTPF_DIST_TAILN]; /* F^-1(2^(k-32)) */
     hstpf_real_t tail_hi[HSTPF_DIST_TAILN]; /* F^-1(1 - 2^(k-32)) */
+    hstpf_real_t mean;                      /* exact mean */
+    hstpf_real_t sd;                        /* exact standard deviation */
+} hstpf_dist_quantiles_t;
+
+/** A built distribution. Treat the members as private. */
+typedef struct {
+    hstpf_dist_quantiles_t qt;              /* sampling: quantiles, tails, moments */
     hstpf_real_t lp[HSTPF_DIST_LN];         /* log-density nodes */
     hstpf_real_t lo, dx, inv_dx;            /* grid start, spacing, 1 / spacing */
     hstpf_real_t tail_b[2], tail_c[2];      /* tails: left [0], right [1] */
@@ -109,8 +119,6 @@ typedef struct {
     hstpf_real_t floor_slope;               /* floor's fall beyond the grid, 1/sd */
     hstpf_real_t dd_max;                    /* tail distance cap: 1e4 sd */
     hstpf_real_t lp_max;                    /* maximum of lp[] */
-    hstpf_real_t mean;                      /* exact mean */
-    hstpf_real_t sd;                        /* exact standard deviation */
     uint8_t hard[2];                        /* tail is a hard support edge */
 } hstpf_dist_t;
 

@@ -512,7 +512,8 @@ typedef struct {
     hstpf_config_t cfg;              /* models/track pointers cleared */
     hstpf_model_t m[HSTPF_MAX_MODELS + 1]; /* the rows; m[n_models]: refine = 2's grid */
     hstpf_theta_t theta[HSTPF_MAX_MODELS];
-    hstpf_dist_t ds, dv, de, unit;   /* noise tables; unit = N(0,1) */
+    hstpf_dist_quantiles_t ds, dv, unit; /* process noises, N(0,1): never a density */
+    hstpf_dist_t de;                      /* the measurement noise, with its density */
     hstpf_track_seg_t track[HSTPF_MAX_TRACK_SEGMENTS];
     hstpf_real_t track_rel[HSTPF_MAX_TRACK_SEGMENTS]; /* starts - origin */
     hstpf_real_t track_acc[HSTPF_MAX_TRACK_SEGMENTS]; /* xi (i + 600/R) */
