@@ -301,7 +301,7 @@ message("    program + simulator  ${_m_app_flash} / ${_m_app_ram} B (hstpf_t and
 set(_sizes "")
 foreach(_cap 3x100 17x100 17x256 17x1000)
   execute_process(COMMAND ${ARM_NM} -S "${_fwdir}/libhstpf_sizes_${_cap}.a" OUTPUT_VARIABLE _o)
-  foreach(_sym instance estimate model dist ws_particle ws_grid)
+  foreach(_sym instance estimate model dist ws_particle ws_grid ws_grid_rows)
     if(_o MATCHES "[0-9a-f]+ ([0-9a-f]+) [BbDdCc] hstpf_sizeof_${_sym}")
       math(EXPR _sz_${_cap}_${_sym} "0x${CMAKE_MATCH_1}")
     else()
@@ -320,11 +320,13 @@ foreach(_cap 3x100 17x100 17x256 17x1000)
   set(_sz_${_cap}_kalman ${_sz_${_cap}_instance})
   math(EXPR _sz_${_cap}_particle "${_sz_${_cap}_instance} + ${_sz_${_cap}_ws_particle}")
   math(EXPR _sz_${_cap}_grid "${_sz_${_cap}_instance} + ${_sz_${_cap}_ws_grid}")
+  math(EXPR _sz_${_cap}_grid_rows "${_sz_${_cap}_instance} + ${_sz_${_cap}_ws_grid_rows}")
   message("  ${_cap}: hstpf_t ${_sz_${_cap}_instance} B, hstpf_estimate_t "
           "${_sz_${_cap}_estimate} B, per model ${_sz_${_cap}_model} B, "
           "per noise table ${_sz_${_cap}_dist} B${_note}")
   message("        with the workspace: Kalman ${_sz_${_cap}_kalman} B, particles "
-          "${_sz_${_cap}_particle} B, grid ${_sz_${_cap}_grid} B")
+          "${_sz_${_cap}_particle} B, grid ${_sz_${_cap}_grid} B (with the hypothesis' grid; "
+          "${_sz_${_cap}_grid_rows} B under Gaussian process noise)")
 endforeach()
 
 # ---- 5. stack from the call graph -------------------------------------------
@@ -537,7 +539,7 @@ string(APPEND _t "| in the link test: libgcc.a flash / RAM | ${_m_libgcc_flash} 
 string(APPEND _t "| in the link test: libc_nano flash / RAM | ${_m_libc_flash} / ${_m_libc_ram} |\n")
 foreach(_cap 3x100 17x100 17x256 17x1000)
   string(APPEND _t "| sizeof(hstpf_t), ${_cap} | ${_sz_${_cap}_instance} |\n")
-  string(APPEND _t "| instance + workspace, ${_cap}: particle / grid engine | ${_sz_${_cap}_particle} / ${_sz_${_cap}_grid} |\n")
+  string(APPEND _t "| instance + workspace, ${_cap}: particle / grid engine (Gaussian process noise) | ${_sz_${_cap}_particle} / ${_sz_${_cap}_grid} (${_sz_${_cap}_grid_rows}) |\n")
 endforeach()
 string(APPEND _t "| sizeof(hstpf_estimate_t), 3 / 17 models | ${_sz_3x100_estimate} / ${_sz_17x100_estimate} |\n")
 string(APPEND _t "| stack, hstpf_step, library call graph (without libm) | ${_st_hstpf_step} |\n")

@@ -60,7 +60,8 @@ static void reset_state(hstpf_t *f)
     f->rf.nis = 1.0;
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
-    for (l = 0; l < f->cfg.n_models; ++l) {
+    /* the rows, and the hypothesis' grid model if it has one */
+    for (l = 0; l < f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1u : 0u); ++l) {
         hstpf_model_t *m = &f->m[l];
         m->logq = lq;
         m->s_mean = m->v_mean = m->loglik = 0;
@@ -166,15 +167,11 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg)
     f->xi = HSTPF_G_ACC / (1.0 + cfg->gamma_rot) / 1000.0;
     f->engine = (uint8_t)hstpf__engine_resolve(cfg);
     /* Kalman: the rows' likelihoods are its own kind. Grid: through the
-     * rows' Kalman yardstick under Gaussian process noise (refine.c; under
-     * Case 2's it delayed on-table decisions), and with refine = 2 on a
-     * grid of its own under any noise (docs/model.md, "Engines").
-     * Particles: Monte Carlo likelihoods, no. */
+     * rows' Kalman yardstick under Gaussian process noise, on a grid of its
+     * own otherwise (or with refine = 2; refine.h, docs/model.md
+     * "Engines"). Particles: Monte Carlo likelihoods, no. */
     f->rf.active = (uint8_t)(cfg->refine && cfg->refine_prior_q > 0.0 &&
-                             (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN ||
-                              (f->engine == (uint8_t)HSTPF_ENGINE_GRID &&
-                               (cfg->refine == 2u || (cfg->noise_s.kind == HSTPF_DIST_GAUSSIAN &&
-                                                      cfg->noise_v.kind == HSTPF_DIST_GAUSSIAN)))));
+                             (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN || f->engine == (uint8_t)HSTPF_ENGINE_GRID));
     for (l = 0; l < cfg->n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         f->theta[l] = cfg->models[l];

@@ -42,17 +42,17 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     hstpf__track_rebase(f);
     q.y1 = f->pend_y - f->origin_m;
     q.y2 = y - f->origin_m;
+    if (f->rf.active && !f->rf.placed) {
+        /* theta from the prior the first time, kept from what was learnt
+         * afterwards; before the engine's placement, which places the
+         * hypothesis' grid (if it has one) at that theta */
+        hstpf__refine_place(f, 0.0, 0.0, 0.0, 0.0, 0.0);
+        f->rf.placed = 1;
+    }
     hstpf__engine_of(f)->place_all(f, &q);
-    if (f->rf.active) {
-        /* (s, v) as the rows' filters have them; theta from the prior the
-         * first time, kept from what was learnt afterwards */
+    if (f->rf.active) { /* (s, v) as the rows' filters have them */
         const hstpf_model_t *m0 = &f->m[0];
-        if (!f->rf.placed) {
-            hstpf__refine_place(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
-            f->rf.placed = 1;
-        } else {
-            hstpf__refine_replace_sv(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
-        }
+        hstpf__refine_replace_sv(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
     }
     f->have_pend = 0;
     f->have_fix = 1;

@@ -14,12 +14,20 @@ void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double
 /* One predict/update step; sets rf.loglik, rf.held, rf.nis. */
 void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st);
 
-/* cfg.refine = 2 on the grid engine: the hypothesis is also one more grid
- * model, f->m[n_models], run at the EKF's theta of the step before, which
- * scores it under the real noise (refine.c). */
+/* Both process noises Gaussian: the rows' Kalman filters on the noise's
+ * moments are a fair yardstick for the hypothesis on the grid engine. */
+static inline int hstpf__process_gaussian(const hstpf_config_t *c)
+{
+    return c->noise_s.kind == HSTPF_DIST_GAUSSIAN && c->noise_v.kind == HSTPF_DIST_GAUSSIAN;
+}
+
+/* On the grid engine the hypothesis is also one more grid model,
+ * f->m[n_models], run at the EKF's theta of the step before, which scores
+ * it under the real noise (refine.c): with refine = 2, and with refine = 1
+ * under non-Gaussian process noise, where the yardstick fails. */
 static inline int hstpf__refine_grid_cfg(const hstpf_config_t *c)
 {
-    return c->refine == 2u && c->refine_prior_q > 0.0;
+    return c->refine_prior_q > 0.0 && (c->refine == 2u || (c->refine == 1u && !hstpf__process_gaussian(c)));
 }
 static inline int hstpf__refine_on_grid(const hstpf_t *f)
 {

@@ -31,7 +31,7 @@ const hstpfd__key_t hstpfd__keys[] = {
     {"grid_speed_lattice", K_BOOL, OFF(grid_speed_lattice), 0, 0, 0,
      "grid engine: 1 = each model's speed cells carried by its own dynamics, 0 = remapped every step"},
     {"refine", K_U16, OFF(refine), 0, 2, 0,
-     "continuous-theta hypothesis: 0 = rows only, 1 = on (grid: Gaussian process noise only), 2 = on under any noise"},
+     "continuous-theta hypothesis: 0 = rows only, 1 = on (grid: a Kalman yardstick, or its own grid under non-Gaussian process noise), 2 = on its own grid under any noise"},
     {"declare_threshold", K_DBL, OFF(declare_threshold), 0, 1, 1,
      "model weight above which a type may be declared"},
     {"declare_hold_s", K_DBL, OFF(declare_hold_s), 0, 1e6, 0, "how long it must stay above, s"},

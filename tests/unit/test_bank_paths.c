@@ -203,11 +203,10 @@ static void test_band_point_theta(void **state)
 
 /* ---- configuration edges -------------------------------------------------- */
 
-/* refine = 1 is ignored by the particle engine, and by the grid engine
- * under non-Gaussian process noise (the yardstick would score the noise,
- * docs/model.md): the continuous hypothesis stays off (q_offtable 0, gain
- * 1, no FIT_NONE). The grid engine with Gaussian process noise weighs it
- * (a Gamma position noise here). */
+/* refine = 1 is ignored by the particle engine: the continuous hypothesis
+ * stays off (q_offtable 0, gain 1, no FIT_NONE). The grid engine weighs it
+ * under any noise: on a grid of its own under a Gamma w_v, through the
+ * rows' Kalman yardstick under a Gamma position noise (docs/model.md). */
 static void test_refine_engines(void **state)
 {
     int i;
@@ -233,7 +232,7 @@ static void test_refine_engines(void **state)
         e = est();
         assert_true(e.valid);
         assert_true(e.gain == 1);
-        if (i < 2) {
+        if (i == 0) {
             assert_true(e.q_offtable == 0);
             assert_true(e.fit != HSTPF_FIT_NONE);
             /* the rows alone carry the weight */
@@ -264,11 +263,14 @@ static void test_refine2_grid(void **state)
     c.noise_v.kind = HSTPF_DIST_GAMMA;
     c.noise_v.shape = 0.1;
     c.noise_v.scale = 0.05;
-    c.refine = 1;
+    c.refine = 0;
     assert_int_equal(hstpf_workspace_size(&c, &n1), HSTPF_OK);
-    c.refine = 2;
+    c.refine = 1; /* under Gamma w_v as refine = 2 */
     assert_int_equal(hstpf_workspace_size(&c, &n2), HSTPF_OK);
     assert_true(n1 == HSTPF_GRID_WS_BYTES(2) && n2 == HSTPF_GRID_WS_BYTES(3));
+    c.refine = 2;
+    assert_int_equal(hstpf_workspace_size(&c, &n2), HSTPF_OK);
+    assert_true(n2 == HSTPF_GRID_WS_BYTES(3));
     c.refine_prior_q = 0.4;
     start(&c);
     (void)run_fixes(0.0, 30);

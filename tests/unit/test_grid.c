@@ -429,12 +429,13 @@ static void test_case2_vs_particle_reference(void **state)
     print_message("95 %% intervals cover the truth: position %.3f, speed %.3f of %d steps\n", (double)cov_s / n_cov,
                   (double)cov_v / n_cov, n_cov);
     assert_true(cov_s >= 0.85 * n_cov && cov_v >= 0.85 * n_cov);
-    { /* Gamma speed noise leaves the continuous hypothesis out, but the rows
-       * keep their spread in the band (cfg.refine, the default): a declared
-       * row's theta_cov is diag(refine_spread x its coefficients)^2 */
+    { /* the continuous hypothesis (cfg.refine, the default; on its own grid
+       * under Gamma speed noise) keeps little weight for a row's train, and
+       * the rows keep their spread in the band: a declared row's theta_cov
+       * is diag(refine_spread x its coefficients)^2 */
         hstpf_estimate_t e;
         (void)hstpf_estimate(&fa, &e);
-        assert_true(e.declared >= 0 && e.q_offtable == 0);
+        assert_true(e.declared >= 0 && e.q_offtable > 0 && e.q_offtable < 0.05f);
         TU_CLOSE((double)e.theta_cov[0], pow(c.refine_spread * m[e.declared].c0, 2), 1e-6 * e.theta_cov[0]);
         TU_CLOSE((double)e.theta_cov[3], pow(c.refine_spread * m[e.declared].c1, 2), 1e-6 * e.theta_cov[3]);
         TU_CLOSE((double)e.theta_cov[5], pow(c.refine_spread * m[e.declared].c2, 2), 1e-6 * e.theta_cov[5]);

@@ -261,15 +261,16 @@ typedef struct {
     /** 1: besides the rows, the bank weighs one continuous hypothesis, a
      *  train near the table but on no row: an augmented EKF on (s, v, c0,
      *  c1, c2, k) with Table 1 as prior (docs/model.md). Used by the
-     *  Kalman engine, and by the grid engine under Gaussian process noise
-     *  (through a Kalman yardstick of the rows); ignored otherwise. 2: on
-     *  the grid engine the hypothesis is scored by one more grid model at
-     *  its current theta instead, exact under any noise (Case 2's Gamma
-     *  too): continuous theta and "no type fits" there; it needs one more
-     *  grid in the workspace, HSTPF_GRID_WS_BYTES(n_models + 1), and its
-     *  step (docs/model.md, "Engines"). 0: rows only (1: a train
-     *  off every row is then seldom declared a wrong type; it costs some
-     *  identification speed on the table, docs/results.md). */
+     *  Kalman engine and the grid engine, ignored by the particle engine.
+     *  On the grid engine it is scored through a Kalman yardstick of the
+     *  rows under Gaussian process noise, and by one more grid model at
+     *  its current theta under non-Gaussian process noise (Case 2's Gamma),
+     *  which needs one more grid in the workspace,
+     *  HSTPF_GRID_WS_BYTES(n_models + 1), and its step (docs/model.md,
+     *  "Engines"). 2: that grid model under any noise. 0: rows only (with
+     *  the hypothesis a train off every row is seldom declared a wrong
+     *  type; it costs some identification speed on the table,
+     *  docs/results.md). */
     uint8_t refine;
     /** Prior weight of the continuous hypothesis, [0, 0.5] (0.01). */
     double refine_prior_q;
@@ -424,8 +425,9 @@ typedef struct {
  * Particles: s, v and log weight per particle and model, and three
  * per-particle arrays for one model's step (plus 16-bit counts). Grid:
  * the cells of every model, the transported grid and a model's saved
- * cells for a retried step, and each model's mass at rest; with
- * refine = 2 the continuous hypothesis is one more grid model:
+ * cells for a retried step, and each model's mass at rest. Where the
+ * continuous hypothesis runs on a grid (cfg.refine 1 under non-Gaussian
+ * process noise, or 2) it is one more grid model:
  * HSTPF_GRID_WS_BYTES(n_models + 1).
  */
 #define HSTPF_WORKSPACE_ALIGN 8u /**< alignment of the workspace, bytes */
@@ -437,7 +439,7 @@ typedef struct {
     HSTPF__WS_ROUND(sizeof(hstpf_real_t) * (((size_t)(n_models) + 2u) * (size_t)HSTPF__GRID_CELLS +         \
                                             ((size_t)(n_models) + 1u) * (size_t)HSTPF_GRID_NS + 4u))
 /** Enough workspace for any engine with n_models models (and n_particles),
- *  refine = 2's grid included. */
+ *  the continuous hypothesis' grid included. */
 #define HSTPF_WORKSPACE_ANY_BYTES(n_models, n_particles)                                                   \
     (HSTPF_PARTICLE_WS_BYTES(n_models, n_particles) > HSTPF_GRID_WS_BYTES((n_models) + 1u)                \
          ? HSTPF_PARTICLE_WS_BYTES(n_models, n_particles)                                                 \
