@@ -118,7 +118,7 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
-/* The grid models: the rows, and refine = 2's hypothesis. */
+/* The grid models: the rows, and the continuous hypothesis' if it has one. */
 static uint16_t n_grids(const hstpf_config_t *c)
 {
     return (uint16_t)(c->n_models + (hstpf__refine_grid_cfg(c) ? 1u : 0u));

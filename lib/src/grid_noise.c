@@ -99,7 +99,7 @@ static void speed_conv(real *p, const real *w, const real *k, int nk, int m0, in
     }
 }
 
-/* refine = 2's grid: its speeds spread by N(0, theta_sd^2) too (theta's
+/* The hypothesis' grid: its speeds spread by N(0, theta_sd^2) too (theta's
  * uncertainty, refine.c), through work; what would go below or above the
  * box is dropped (it scores as mass the prediction lost). */
 static void theta_spread(hstpf_t *f, real *p, const real *ng)

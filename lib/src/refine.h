@@ -42,7 +42,7 @@ static inline int hstpf__refine_yardstick(const hstpf_t *f)
     return f->rf.active && f->engine != (uint8_t)HSTPF_ENGINE_KALMAN && !hstpf__refine_on_grid(f);
 }
 
-/* refine = 2 on the grid: its grid model's resistance from the EKF's
+/* The hypothesis' grid model: its resistance from the EKF's
  * theta (each coefficient >= 0). */
 void hstpf__refine_grid_theta(hstpf_t *f);
 
@@ -50,13 +50,13 @@ void hstpf__refine_grid_theta(hstpf_t *f);
  * adds, for that grid to spread by. */
 double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st);
 
-/* refine = 2 on the grid, after the engine's step and
+/* With the hypothesis on a grid, after the engine's step and
  * hstpf__refine_update: the hypothesis is scored by its grid (its
  * likelihood, floor and rest), not by the EKF. */
 void hstpf__refine_from_grid(hstpf_t *f, const hstpf__step_t *st);
 
 /* The hypothesis' (s, v) mean and variances as published: its grid
- * model's with refine = 2 on the grid, else the EKF's. */
+ * model's when it has one (hstpf__refine_on_grid), else the EKF's. */
 void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv);
 
 /* The yardstick's step, after the engine's and hstpf__refine_update: the

@@ -458,11 +458,11 @@ typedef struct {
     hstpf_real_t (*rest)[HSTPF_GRID_NS];                 /* mass at rest (v = 0), per position cell */
     hstpf_real_t *work;                                  /* the transported grid, HSTPF__GRID_CELLS */
     hstpf_real_t *save;                                  /* a model's cells before the step (+ NS + 4) */
-    hstpf_real_t geom[HSTPF_MAX_MODELS + 1][4];          /* s0, ds, v0, dv: first edges, widths (+ refine = 2's) */
+    hstpf_real_t geom[HSTPF_MAX_MODELS + 1][4];          /* s0, ds, v0, dv: first edges, widths (+ the hypothesis') */
     hstpf_real_t pred_mass[HSTPF_MAX_MODELS + 1];        /* mass kept by the last prediction */
     hstpf_real_t rnew[HSTPF_GRID_NS], rpend[HSTPF_GRID_NS]; /* rest being built: held, and to be diffused */
     hstpf_real_t tail;                                   /* mass a box leaves out per side */
-    hstpf_real_t theta_sd;                               /* this step's speed sd from theta (refine = 2's grid) */
+    hstpf_real_t theta_sd;                               /* this step's speed sd from theta (the hypothesis' grid) */
     hstpf_real_t row[HSTPF_GRID_NS];                     /* one row */
     hstpf_real_t ms[HSTPF_GRID_NS], mv[HSTPF_GRID_NV];   /* marginals */
     hstpf_real_t vimg[HSTPF_GRID_NV + 1];                /* speed-cell edges after the dynamics */
@@ -512,7 +512,7 @@ typedef struct {
 typedef struct {
     uint32_t magic;
     hstpf_config_t cfg;              /* models/track pointers cleared */
-    hstpf_model_t m[HSTPF_MAX_MODELS + 1]; /* the rows; m[n_models]: refine = 2's grid */
+    hstpf_model_t m[HSTPF_MAX_MODELS + 1]; /* the rows; m[n_models]: the hypothesis' grid, if it has one */
     hstpf_theta_t theta[HSTPF_MAX_MODELS];
     hstpf_dist_quantiles_t ds, dv, unit; /* process noises, N(0,1): never a density */
     hstpf_dist_t de;                      /* the measurement noise, with its density */
