@@ -425,7 +425,7 @@ else()
                           -serial none -semihosting-config enable=on,target=native
                           -kernel "${_elf}"
                   RESULT_VARIABLE _qrc OUTPUT_VARIABLE _qout ERROR_VARIABLE _qerr
-                  TIMEOUT 300)
+                  TIMEOUT 600)
   set(_qall "${_qout}${_qerr}")
   message("${_qall}")
   if(NOT _qrc EQUAL 0 OR NOT _qall MATCHES "HSTPF-M4F-OK")
@@ -467,6 +467,16 @@ else()
     math(EXPR _qg_step17 "${_qg_ims} * 17")
     message("grid engine (${_qg_shape}): ${_qg_instr} instructions for ${_qg_ms} model-steps = "
             "${_qg_ims} per model-step, ${_qg_step17} for a 17-model step")
+  endif()
+  # Case 2 inputs: the rows and the continuous hypothesis' grid (a 17-row
+  # bank steps 18 grid models there)
+  if(_qall MATCHES "timed Case 2 grid pass: ([0-9]+) steps of ([0-9]+) grid models in ([0-9]+) SysTick")
+    math(EXPR _qg2_ms "${CMAKE_MATCH_1} * ${CMAKE_MATCH_2}")
+    math(EXPR _qg2_instr "${CMAKE_MATCH_3} * 40")
+    math(EXPR _qg2_ims "(${_qg2_instr} + ${_qg2_ms} / 2) / ${_qg2_ms}")
+    math(EXPR _qg2_step17 "${_qg2_ims} * 18")
+    message("grid engine, Case 2 (${_qg_shape}): ${_qg2_instr} instructions for ${_qg2_ms} grid model-steps = "
+            "${_qg2_ims} per grid model-step, ${_qg2_step17} for a 17-row step (18 grid models)")
   endif()
   set(_qemu_summary "passed")
   if(HSTPF_HOST_DEMO AND EXISTS "${HSTPF_HOST_DEMO}")
@@ -520,6 +530,7 @@ budget_check("stack hstpf_step (QEMU, painted)" "${_qs_step}" ${HSTPF_BUDGET_STA
 budget_check("instructions per particle-step" "${_q_ips}" ${HSTPF_BUDGET_INSTR_PARTICLE_STEP})
 budget_check("instructions per Kalman model-step" "${_qk_ims}" ${HSTPF_BUDGET_INSTR_KALMAN_MODEL})
 budget_check("instructions per grid model-step" "${_qg_ims}" ${HSTPF_BUDGET_INSTR_GRID_MODEL})
+budget_check("instructions per grid model-step, Case 2" "${_qg2_ims}" ${HSTPF_BUDGET_INSTR_GRID_MODEL_CASE2})
 if(NOT _over STREQUAL "")
   message(FATAL_ERROR "over budget (cmake/footprint-budgets.cmake):${_over}\n"
                       "raise a budget only as a decision, in the same commit, saying why")
@@ -558,6 +569,9 @@ if(DEFINED _qk_ims)
 endif()
 if(DEFINED _qg_ims)
   string(APPEND _t "| instructions per model-step, grid engine ${_qg_shape} (QEMU -icount) | ${_qg_ims} |\n")
+endif()
+if(DEFINED _qg2_ims)
+  string(APPEND _t "| instructions per grid model-step, Case 2 inputs, 3 rows and the hypothesis' grid (QEMU -icount) | ${_qg2_ims} |\n")
 endif()
 file(WRITE "${_md}" "Compiler: ${_gccver}; flags: ${_flags} -std=c99\n\n${_t}\nOn-target run: ${_qemu_summary}\n")
 message("summary written to ${_md}")
