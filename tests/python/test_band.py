@@ -39,3 +39,41 @@ def test_band_pairs_only_with_its_own_step():
     series[EST_BAND].append((11.0, {**ok, "BandValid": 1, "WSd0": 0.3}))
     assert band_at(series, 11.0)["WSd0"] == 0.3
     assert band_at({}, 11.0) is None
+
+
+def test_curve_band_z_is_the_headers_and_the_chi_square_quantile():
+    """Z_CURVE is hstpf.h's HSTPF_BAND_Z_CURVE, and its square the chi-square 95 %
+    quantile with 3 degrees of freedom: F(x) = erf(sqrt(x / 2)) - sqrt(2 x / pi) exp(-x / 2)."""
+    import math
+    import pathlib
+
+    from hstpf_tools.score import Z_CURVE
+
+    header = pathlib.Path(__file__).resolve().parents[2] / "lib" / "include" / "hstpf" / "hstpf.h"
+    said = re.search(r"#define HSTPF_BAND_Z_CURVE ([\d.]+)", header.read_text())
+    assert said and float(said.group(1)) == Z_CURVE
+    x = Z_CURVE * Z_CURVE
+    cdf = math.erf(math.sqrt(x / 2)) - math.sqrt(2 * x / math.pi) * math.exp(-x / 2)
+    assert cdf == pytest.approx(0.95, abs=1e-4)
+
+
+def test_curve_band_holds_the_curve_when_theta_is_in_its_ellipsoid():
+    """Scheffe: |h'(e)| <= Z_CURVE sqrt(h' S h) at every speed exactly when e' S^-1 e <= Z_CURVE^2
+    (the largest ratio over h is sqrt(e' S^-1 e), reached at h = S^-1 e); checked on random
+    covariances and errors, at a dense grid of speeds including the maximising one."""
+    from hstpf_tools.score import Z_CURVE
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        a = rng.normal(size=(3, 3)) * np.array([0.3, 0.003, 5e-5])
+        cov = a @ a.T + np.diag([1e-4, 1e-8, 1e-12])
+        e = rng.multivariate_normal(np.zeros(3), cov) * rng.uniform(0.5, 2.0)
+        nees = float(e @ np.linalg.solve(cov, e))
+        ratio = lambda h: abs(h @ e) / np.sqrt(h @ cov @ h)  # noqa: E731
+        hs = np.linalg.solve(cov, e)
+        assert ratio(hs) == pytest.approx(np.sqrt(nees), rel=1e-9)
+        v = np.linspace(-1000.0, 1000.0, 2001)
+        grid_max = max(ratio(np.array([1.0, x, x * x])) for x in v)
+        assert grid_max <= np.sqrt(nees) * (1 + 1e-9)
+        if nees <= Z_CURVE ** 2:
+            assert grid_max <= Z_CURVE * (1 + 1e-9)

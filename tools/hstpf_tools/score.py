@@ -35,7 +35,10 @@ from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
 OUTPUT_SENDER = "HSTPF"  # the DBC node of the estimator: its frames are the outputs
-Z95 = 1.959963984540054  # two-sided 95 % of a normal distribution
+Z95 = 1.959963984540054  # two-sided 95 % of a normal distribution: W at one speed
+# the whole curve W(v) at once: hstpf.h's HSTPF_BAND_Z_CURVE (sqrt of the chi-square
+# 95 % quantile, 3 degrees of freedom; tests/python/test_band.py checks they agree)
+Z_CURVE = 2.7955
 
 
 def read_truth(path: str) -> Dict[str, np.ndarray]:
@@ -256,8 +259,11 @@ def metrics(series, truth) -> dict:
         if band is not None:
             # the final band around the final W(v): the share of 0..350 km/h where it holds the truth
             v = V_GRID_KMH / 3.6
-            half = Z95 * band_sd(band, V_GRID_KMH)
-            res["w_band_coverage"] = float(np.mean(np.abs(est.resistance(v) - th_true.resistance(v)) <= half))
+            sd = band_sd(band, V_GRID_KMH)
+            err = np.abs(est.resistance(v) - th_true.resistance(v))
+            res["w_band_coverage"] = float(np.mean(err <= Z95 * sd))
+            # the curve's band: does it hold the true curve at every speed
+            res["w_curve_band_covers"] = bool(np.all(err <= Z_CURVE * sd))
         if decision is not None:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
@@ -407,9 +413,13 @@ def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Op
         sds = [sd_series(series, SD_SIGNALS[c]) for c in ("c0", "c1", "c2")]
         last_band = band_at(series, thf[-1][0])
         if last_band is not None:
-            band = Z95 * band_sd(last_band, vk)
+            sd = band_sd(last_band, vk)
+            band = Z95 * sd
             ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.2, lw=0,
-                            label="95 % band (EstBand)")
+                            label="95 % at each speed (EstBand)")
+            band = Z_CURVE * sd
+            ax.fill_between(vk, w_est - band, w_est + band, color="tab:orange", alpha=0.1, lw=0,
+                            label="95 % for the whole curve")
         elif all(x is not None for x in sds):
             # final sd of each coefficient; their covariances are not published, so this band treats
             # them as independent: var W = sum_k (V^k sd_k)^2

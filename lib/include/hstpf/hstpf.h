@@ -655,10 +655,19 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
  */
 int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
 
+/** The 95 % band of the whole curve W(v), in sd of W at each speed: the
+ *  square root of the chi-square 95 % quantile with 3 degrees of freedom.
+ *  W(v) = h'theta is linear in theta, so the curve lies within W +- z sd
+ *  at every speed exactly when theta lies within its 95 % ellipsoid
+ *  (Scheffe's band; docs/model.md). 1.96 holds one speed only. */
+#define HSTPF_BAND_Z_CURVE 2.7955
+
 /**
  * @brief Running resistance W(v) of an estimate's theta and its standard
  * deviation from theta_cov: W = h'theta, sd^2 = h' Cov h, h = (1, V, V^2),
- * V = 3.6 v km/h. A 95 % band is W +- 1.96 sd.
+ * V = 3.6 v km/h. W +- 1.96 sd holds W at one speed with 95 %; a band for
+ * the whole curve, which holds W at every speed at once with 95 %, is
+ * W +- HSTPF_BAND_Z_CURVE sd.
  * @return HSTPF_OK; HSTPF_E_NULL; HSTPF_E_NONFINITE (v, or the estimate's
  *   W or variance at v not finite: *w and *sd are then unchanged). Cost O(1).
  */
