@@ -676,7 +676,7 @@ struct hstpf_can_est_theta_t {
 /**
  * Signals in message EstBand.
  *
- * The 95 % band of the running resistance W(v) = c0 + c1 V + c2 V^2 of EstTheta: the standard deviation of W at V = 0, 87.5, 175, 262.5 and 350 km/h (the mixture over the rows, each with its spread, and the continuous hypothesis). sd(V)^2 is a polynomial of degree 4 in V, so these five values give it exactly at every speed (Lagrange interpolation of the squares); the band is W +- 1.96 sd. Cycle 1000 ms, for the same step as EstTheta.
+ * The 95 % band of the running resistance W(v) = c0 + c1 V + c2 V^2 of EstTheta: the standard deviation of W at V = 0, 87.5, 175, 262.5 and 350 km/h (the mixture over the rows, each with its spread, and the continuous hypothesis). sd(V)^2 is a polynomial of degree 4 in V, so these five values give it exactly at every speed (Lagrange interpolation of the squares); W +- 1.96 sd holds W at one speed with 95 %, W +- 2.7955 sd the whole curve at once (HSTPF_BAND_Z_CURVE). Cycle 1000 ms, for the same step as EstTheta.
  *
  * All signal values are as on the CAN bus.
  */
