@@ -60,8 +60,8 @@ static void reset_state(hstpf_t *f)
     f->rf.nis = 1.0;
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
-    /* the rows, and the hypothesis' grid model if it has one */
-    for (l = 0; l < f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1u : 0u); ++l) {
+    /* the rows, and the slot of the hypothesis' grid model (unused without one) */
+    for (l = 0; l <= f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         m->logq = lq;
         m->s_mean = m->v_mean = m->loglik = 0;

@@ -46,7 +46,7 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
         /* theta from the prior the first time, kept from what was learnt
          * afterwards; before the engine's placement, which places the
          * hypothesis' grid (if it has one) at that theta */
-        hstpf__refine_place(f, 0.0, 0.0, 0.0, 0.0, 0.0);
+        hstpf__refine_place(f);
         f->rf.placed = 1;
     }
     hstpf__engine_of(f)->place_all(f, &q);

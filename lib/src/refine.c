@@ -45,7 +45,7 @@ static void prior(const hstpf_t *f, double *mu, double *cov)
     }
 }
 
-void hstpf__refine_place(hstpf_t *f, double s, double v, double pss, double psv, double pvv)
+void hstpf__refine_place(hstpf_t *f)
 {
     hstpf_refine_t *r = &f->rf;
     double mu[3], cov[9];
@@ -53,15 +53,10 @@ void hstpf__refine_place(hstpf_t *f, double s, double v, double pss, double psv,
     prior(f, mu, cov);
     memset(r->kz, 0, sizeof r->kz);
     memset(r->kp, 0, sizeof r->kp);
-    r->kz[0] = s;
-    r->kz[1] = v;
     r->kz[2] = mu[0];
     r->kz[3] = mu[1];
     r->kz[4] = mu[2];
     r->kz[5] = 1.0;
-    r->kp[0] = pss;
-    r->kp[1] = r->kp[NZ] = psv;
-    r->kp[NZ + 1] = pvv;
     for (i = 0; i < 3; ++i) {
         for (j = 0; j < 3; ++j) {
             r->kp[(2 + i) * NZ + 2 + j] = cov[3 * i + j];

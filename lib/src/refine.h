@@ -4,9 +4,9 @@
 
 #include "engine.h"
 
-/* Places the hypothesis: (s, v) with the given covariance, theta and k
- * from the prior. */
-void hstpf__refine_place(hstpf_t *f, double s, double v, double pss, double psv, double pvv);
+/* Places the hypothesis' theta and k from the prior, (s, v) at 0 with no
+ * spread: hstpf__refine_replace_sv places them. */
+void hstpf__refine_place(hstpf_t *f);
 
 /* Places (s, v) again, keeping what was learnt of theta and k. */
 void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double psv, double pvv);
