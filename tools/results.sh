@@ -34,23 +34,23 @@ echo "== trains not on Table 1: defaults (the continuous hypothesis on), then wi
 for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
-  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tee "$out/$s-norefine.txt"
 done
 echo "== the continuous hypothesis's prior weight: on-table speed against off-table safety"
 for q in 0.03 0.02 0.003 0.001; do
   for s in paper1 all17 off15 mass20 absent grade8; do
-    "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tail -2 | tee "$out/$s-prior$q.txt"
+    "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tee "$out/$s-prior$q.txt"
   done
 done
 echo "== the rows' spread (refine_spread, default 0.3): the band against the decisions"
 for sp in 0.2 0.4; do
   for s in paper1 all17 stops off10 off15 off20 mass10 mass20 absent; do
-    "$mc" --scenario "$s" --seeds "$seeds" --refine-spread "$sp" | tail -1 | tee "$out/$s-spread$sp.txt"
+    "$mc" --scenario "$s" --seeds "$seeds" --refine-spread "$sp" | tee "$out/$s-spread$sp.txt"
   done
 done
 echo "== on-table figures without the continuous hypothesis"
 for s in paper1 all17 stops; do
-  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tee "$out/$s-norefine.txt"
 done
 .venv/bin/python tools/figures/theta_limit.py --json "$out/theta_limit.json" | tee "$out/theta_limit.txt"
 .venv/bin/python tools/figures/theta_limit.py --scale 1.1 1.1 1.1 | tee "$out/theta_limit_mass10.txt"
@@ -102,7 +102,7 @@ for s in stops-t off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 for s in off15-t grade8-t; do
-  "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tail -1 | tee "$out/$s-norefine.txt"
+  "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tee "$out/$s-norefine.txt"
 done
 echo "== trains not on Table 1 under Case 2 noise: the defaults (the hypothesis on its own grid since the"
 echo "   fifteenth session) and the rows alone (--no-refine; what the defaults did before)"

@@ -101,3 +101,22 @@ def test_offtable_student_t_rows(tmp_path):
     assert len(table) == 4  # header, rule, on and off (no stops-t, off15-t files)
     assert table[2].startswith("| `grade8-t` | on (default) | 3.11% / 13.54% | 91.0% | 61.8% | 0.5% |")
     assert table[3].startswith("| `grade8-t` | off |")
+
+
+def test_offtable_far_split(tmp_path):
+    # hstpf-mc's current wording: the pointwise band, the curve's band, and the runs whose truth is
+    # >= 10 % from every row; an older output without the split gets '-'
+    off = ("trains off the table: W(v) error at the end median 1.64% p90 4.52%; the pointwise 95% band (+- 1.96 sd) "
+           "covers the truth at 68 of 71 speeds in 78.9% of runs; 'no type fits' at the end in 98.5%; a type "
+           "declared in 21.9% (refine on)\n"
+           "the curve's 95% band (+- 2.796 sd) covers the truth at every speed in 94.9% of runs; theta within its "
+           "95% ellipsoid (theta_cov) at the end in 92.4% of 1700 runs with a regular theta_cov\n")
+    split = ("by the truth's W(v) distance from its nearest bank row (RMS over 0..350 km/h): >= 10%: 950 runs, "
+             "'no type fits' at the end 99.1%, a type declared 3.2% (at the end 0.4%); < 10%: 750 runs, 97.6%, "
+             "44.0% (1.9%)\n")
+    (tmp_path / "off15.txt").write_text(off + split)
+    (tmp_path / "off15-norefine.txt").write_text(off)
+    table = rt.offtable(tmp_path, ["off15"]).splitlines()
+    assert len(table) == 4
+    assert table[2] == "| `off15` | on (default) | 1.64% / 4.52% | 78.9% | 98.5% | 21.9% | 950: 99.1%, 3.2% |"
+    assert table[3].endswith("| 21.9% | - |")
