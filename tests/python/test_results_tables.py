@@ -111,7 +111,8 @@ def test_offtable_far_split(tmp_path):
            "declared in 21.9% (refine on)\n"
            "the curve's 95% band (+- 2.796 sd) covers the truth at every speed in 94.9% of runs; theta within its "
            "95% ellipsoid (theta_cov) at the end in 92.4% of 1700 runs with a regular theta_cov\n")
-    split = ("by the truth's W(v) distance from its nearest bank row (RMS over 0..350 km/h): >= 10%: 950 runs, "
+    split = ("by the truth's W(v) distance from its nearest bank row (RMS over 0..350 km/h, relative to the row): "
+             ">= 10%: 950 runs, "
              "'no type fits' at the end 99.1%, a type declared 3.2% (at the end 0.4%); < 10%: 750 runs, 97.6%, "
              "44.0% (1.9%)\n")
     (tmp_path / "off15.txt").write_text(off + split)
