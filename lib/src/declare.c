@@ -74,49 +74,6 @@ static void update_fit(hstpf_t *f, double dt, int evidence)
     }
 }
 
-/* Row l's theta outside the continuous hypothesis' own theta ellipsoid
- * (HSTPF_DECLARE_THETA_NEES). The row's weight against the hypothesis is
- * the hypothesis' posterior density at the row over its prior density
- * there (Savage-Dickey), so a row the posterior puts several sd away can
- * still lead by the prior's width (Lindley); the ellipsoid says whether the
- * data allow the row at all. In correlation form, by Cholesky: the
- * coefficients differ by eight orders of magnitude. A covariance that is
- * not positive definite excludes nothing. */
-static int theta_excludes(const hstpf_t *f, int16_t l)
-{
-    const double row[3] = {f->theta[l].c0, f->theta[l].c1, f->theta[l].c2};
-    double th[3], c[9], sd[3], z[3], a, b, e, nees;
-    int i;
-    hstpf__refine_theta(f, th, c);
-    for (i = 0; i < 3; ++i) {
-        if (!(c[4 * i] > 0.0) || !hstpf__fin(c[4 * i])) {
-            return 0;
-        }
-        sd[i] = sqrt(c[4 * i]);
-        z[i] = (row[i] - th[i]) / sd[i];
-    }
-    /* R = L L', R the correlation matrix; nees = |L^-1 z|^2 */
-    a = c[1] / (sd[0] * sd[1]);
-    b = c[2] / (sd[0] * sd[2]);
-    e = 1.0 - a * a;
-    if (!(e > 0.0)) {
-        return 0;
-    }
-    {
-        const double l11 = sqrt(e);
-        const double l21 = (c[5] / (sd[1] * sd[2]) - b * a) / l11;
-        const double d2 = 1.0 - b * b - l21 * l21;
-        double w1, w2;
-        if (!(d2 > 0.0)) {
-            return 0;
-        }
-        w1 = (z[1] - a * z[0]) / l11;
-        w2 = (z[2] - b * z[0] - l21 * w1) / sqrt(d2);
-        nees = z[0] * z[0] + w1 * w1 + w2 * w2;
-    }
-    return hstpf__fin(nees) && nees > HSTPF_DECLARE_THETA_NEES;
-}
-
 /* The declaration state machine of hstpf.h. The hold timer runs only on
  * steps that carry evidence: not at standstill, not without a fix. */
 void hstpf__update_declaration(hstpf_t *f, double dt, int evidence)
@@ -127,7 +84,7 @@ void hstpf__update_declaration(hstpf_t *f, double dt, int evidence)
         f->status = HSTPF_STATUS_WITHDRAWN;
         f->decision_time_s = -1.0;
     }
-    if (exp(f->m[best].logq) > f->cfg.declare_threshold && !(f->rf.active && theta_excludes(f, best))) {
+    if (exp(f->m[best].logq) > f->cfg.declare_threshold) {
         if (best == f->leader) {
             f->held_s += evidence ? dt : 0.0;
         } else {

@@ -12,7 +12,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bank.h"     /* hstpf__update_declaration: the rule, set by hand */
 #include "internal.h" /* hstpf__resample_counts: exposed for tests */
 #include "refine.h"   /* hstpf__refine_grid_theta, checked by hand */
 #include "testutil.h"
@@ -327,80 +326,6 @@ static void test_declare_hold_zero(void **state)
         assert_int_equal(e.declared, -1);
     }
     fail_msg("CRH3 never above the threshold in 600 s");
-}
-
-/* The continuous hypothesis' theta ellipsoid against a leading row
- * (HSTPF_DECLARE_THETA_NEES, hstpf.h): the bank is set by hand to a row
- * that leads with 0.999 and a hypothesis whose theta sits z sd from the
- * row, so (theta_row - theta)' P^-1 (theta_row - theta) is known: with a
- * diagonal P it is |z|^2; with c0 and c1 correlated by r it is (z0^2 -
- * 2 r z0 z1 + z1^2) / (1 - r^2). Hold 0: a row the ellipsoid allows is
- * declared at that step. */
-static void set_hypothesis(const double z[3], double r01)
-{
-    const double th[3] = {rows[0].c0, rows[0].c1, rows[0].c2};
-    int i, j;
-    for (i = 0; i < 3; ++i) {
-        const double sd_i = 0.1 * th[i];
-        f.rf.kz[2 + i] = th[i] - z[i] * sd_i;
-        for (j = 0; j < 3; ++j) {
-            const double sd_j = 0.1 * th[j];
-            const double rho = i == j ? 1.0 : ((i + j == 1) ? r01 : 0.0);
-            f.rf.kp[(2 + i) * HSTPF_REFINE_NZ + 2 + j] = rho * sd_i * sd_j;
-        }
-    }
-    f.m[0].logq = log(0.999);
-    f.m[1].logq = log(0.0005);
-    f.rf.logq = log(0.0005);
-    f.declared = -1;
-    f.leader = -1;
-    f.held_s = 0.0;
-    f.status = HSTPF_STATUS_UNDECIDED;
-}
-
-static void test_declare_theta_ellipsoid(void **state)
-{
-    static const double in[3] = {2.0, 2.0, 1.5};  /* 10.25 */
-    static const double out[3] = {2.0, 2.0, 2.6}; /* 14.76 */
-    static const double anti[3] = {2.0, -2.0, 0.0}; /* 8; (8 + 7.2) / 0.19 = 80 with r = 0.9 */
-    hstpf_config_t c;
-    (void)state;
-    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
-    c.declare_hold_s = 0.0;
-    start(&c);
-    assert_true(f.rf.active);
-    (void)run_fixes(0.0, 5);
-
-    set_hypothesis(out, 0.0);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, -1);
-    assert_int_equal(f.leader, -1);
-    assert_int_equal(f.status, HSTPF_STATUS_UNDECIDED);
-
-    set_hypothesis(in, 0.0);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, 0);
-    assert_int_equal(f.status, HSTPF_STATUS_DECLARED);
-    /* a declared row is not withdrawn by the ellipsoid, only by its weight */
-    f.rf.kz[2] = rows[0].c0 - 4.0 * 0.1 * rows[0].c0;
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, 0);
-
-    set_hypothesis(anti, 0.0);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, 0);
-    set_hypothesis(anti, 0.9);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, -1);
-    /* anti-correlated: (8 - 7.2) / 0.19 = 4.2 */
-    set_hypothesis(anti, -0.9);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, 0);
-
-    /* a covariance that is not positive definite excludes nothing */
-    set_hypothesis(out, 1.0);
-    hstpf__update_declaration(&f, 1.0, 1);
-    assert_int_equal(f.declared, 0);
 }
 
 /* q_floor at the top of its range for one row and the continuous
@@ -894,7 +819,6 @@ int main(void)
         cmocka_unit_test(test_lock_kept_by_continuous),
         cmocka_unit_test(test_validity_injected),
         cmocka_unit_test(test_nonfinite_paths),
-        cmocka_unit_test(test_declare_theta_ellipsoid),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -326,12 +326,6 @@ typedef struct {
  * declared >= 0 exactly when the status is DECLARED or CHANGED, and then
  * theta is the declared row's theta. In UNDECIDED and WITHDRAWN, declared
  * is -1 and theta is the weight blend.
- *
- * With the continuous hypothesis on (cfg.refine), a leader is not held
- * (nor declared) while its row's theta lies outside the hypothesis' own
- * theta ellipsoid of HSTPF_DECLARE_THETA_NEES: the data, read without the
- * table, exclude that row, though the row may still lead the weights by
- * the hypothesis' wider prior (docs/model.md, "Declaration").
  */
 typedef enum {
     HSTPF_STATUS_UNDECIDED = 0, /**< no type declared yet */
@@ -667,12 +661,6 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out);
  *  at every speed exactly when theta lies within its 95 % ellipsoid
  *  (Scheffe's band; docs/model.md). 1.96 holds one speed only. */
 #define HSTPF_BAND_Z_CURVE 2.7955
-
-/** A row is not declared while (theta_row - theta)' P^-1 (theta_row -
- *  theta) exceeds this, theta and P the continuous hypothesis' own
- *  estimate of (c0, c1, c2) and its covariance: the chi-square 99 %
- *  quantile with 3 degrees of freedom (hstpf_status_t). */
-#define HSTPF_DECLARE_THETA_NEES 11.345
 
 /**
  * @brief Running resistance W(v) of an estimate's theta and its standard
