@@ -100,7 +100,7 @@ def prior(d: Path) -> str:
         files = [d / f"{s}{tag}.txt" for s in ["paper1", "all17"] + off]
         if not all(f.exists() for f in files):
             continue
-        # paper1: its CRH3 row (the -norefine file holds that row alone)
+        # paper1: its CRH3 row
         row = [ln for ln in files[0].read_text().splitlines() if ln.startswith("CRH3 ")][-1].split()
         offt = [last(f, "trains off the table:") for f in files[2:]]
         out.append("| {} | {} / {} / {} | {} | {} | {} |".format(
