@@ -21,9 +21,11 @@ OFFTABLE_CASE2 = ["off15-case2", "grade8-case2", "mass20-case2", "absent-case2"]
 BAND = r"covers the truth at 68 of 71 speeds in ([\d.]+%)|covers the truth in ([\d.]+%)"
 
 
-def last(path: Path, prefix: str) -> str:
+def last(path: Path, prefix: str, missing: str = None) -> str:
     lines = [ln for ln in path.read_text().splitlines() if ln.startswith(prefix)]
     if not lines:
+        if missing is not None:
+            return missing
         raise SystemExit(f"{path}: no line starting with {prefix!r}")
     return lines[-1]
 
@@ -62,10 +64,9 @@ def far_split(path: Path) -> str:
     """The runs whose truth is >= 10 % from every row (issue 10's off-table
     runs): how many, 'no type fits' at the end, a type declared; '-' for an
     output older than the split."""
-    lines = [ln for ln in path.read_text().splitlines() if ln.startswith("by the truth's W(v) distance")]
-    if not lines:
+    t = last(path, "by the truth's W(v) distance", missing="")
+    if not t:
         return "-"
-    t = lines[-1]
     return "{}: {}, {}".format(num(r">= 10%: (\d+) runs", t), num(r">= 10%: \d+ runs, 'no type fits' at the end ([\d.]+%)", t),
                                num(r">= 10%: \d+ runs, [^,]+, a type declared ([\d.]+%)", t))
 
