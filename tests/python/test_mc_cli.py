@@ -34,3 +34,23 @@ def test_json_file_keeps_the_table_on_stdout(mc, tmp_path):
     r = subprocess.run([mc, *ARGS, "--json", str(out)], capture_output=True, text=True, check=True)
     assert "truth" in r.stdout
     assert json.loads(out.read_text())["results"][0]["truth"] == "CRH3"
+
+
+OFF = ["--scenario", "off15", "--truth", "CRH3", "--seeds", "3", "--duration", "600", "--threads", "1"]
+
+
+def test_oracle_measures_without_touching_the_filter(mc, tmp_path):
+    """--oracle runs a second bank beside the filter: the filter's figures
+    are the same with it, and each run's oracle fields are within range."""
+    plain = subprocess.run([mc, *OFF], capture_output=True, text=True, check=True).stdout.splitlines()
+    out = tmp_path / "o.json"
+    r = subprocess.run([mc, *OFF, "--oracle", "--json", str(out)], capture_output=True, text=True, check=True)
+    lines = r.stdout.splitlines()
+    assert lines[:-1] == plain  # one line more, nothing else changed
+    assert lines[-1].startswith("oracle (the truth's own theta")
+    runs = json.loads(out.read_text())["results"][0]["runs"]
+    assert len(runs) == 3
+    for run in runs:
+        assert run["oracle_sep"] == -1 or 0 <= run["oracle_sep"] <= 601
+        if not run["false_decl"]:
+            assert run["oracle_llr_decl"] is None and run["oracle_llr_near_decl"] is None

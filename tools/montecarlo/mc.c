@@ -76,6 +76,7 @@ typedef struct {
     double floor_depth, edge_soft;
     int floor_set, soft_set;
     int gauss_e;                /* the filter is told a Gaussian of e's sd, not e's density */
+    int oracle;                 /* --oracle: the truth's own theta scored beside its nearest rows */
 } settings_t;
 
 typedef struct {
@@ -100,6 +101,12 @@ typedef struct {
     double theta_nees;          /* (theta - truth)' theta_cov^-1 (theta - truth) at the end; -1: singular */
     double d_table;             /* the truth's W(v) distance from its nearest bank row (w_dist_row) */
     int near_row;               /* that row */
+    /* --oracle: a second bank on the same inputs, the truth's own theta
+     * beside its ORACLE_ROWS nearest rows, without the hypothesis; its
+     * cumulative log-likelihood ratios, the truth's against a row */
+    double or_sep;              /* the truth leads its nearest row by log 99 from here to the end (-1: not at the end) */
+    double or_llr_decl;         /* against the wrongly declared row when first declared (NaN: not among them) */
+    double or_llr_near_decl;    /* against the nearest row at that time */
     journey_t j;
 } run_t;
 
@@ -250,6 +257,40 @@ static int table_index(const work_t *w, int truth, int b)
     return b < 0 ? -1 : (w->sc->absent && b >= truth ? b + 1 : b);
 }
 
+#define ORACLE_ROWS 4 /* the rows nearest the truth scored in the oracle's bank */
+#define LOG99 4.59511985013459 /* log(0.99 / 0.01): the evidence a 0.99 weight stands for */
+
+/* The oracle's bank: ob[0] the truth's own theta (with an unmodelled grade
+ * as c0, as the distance counts it), then the filter's rows nearest it in
+ * W(v); their indices of w->models in oi[1..]. Returns the bank size. */
+static int oracle_bank(const work_t *w, int truth, const hstpf_theta_t *wt, hstpf_theta_t *ob, int *oi)
+{
+    int n = 1, k, i;
+    double d[ORACLE_ROWS + 1];
+    ob[0] = *wt;
+    oi[0] = -1;
+    for (k = 0; k < w->n_models; ++k) {
+        const double dk = w_dist_row(wt, &w->models[k]);
+        if (w->sc->absent && k == truth) {
+            continue; /* not in the filter's bank */
+        }
+        for (i = n; i > 1 && dk < d[i - 1]; --i) { /* insertion into the sorted rows */
+            if (i <= ORACLE_ROWS) {
+                d[i] = d[i - 1];
+                ob[i] = ob[i - 1];
+                oi[i] = oi[i - 1];
+            }
+        }
+        if (i <= ORACLE_ROWS) {
+            d[i] = dk;
+            ob[i] = w->models[k];
+            oi[i] = k;
+            n += n <= ORACLE_ROWS;
+        }
+    }
+    return n;
+}
+
 static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
 {
     static const double thr = 0.9;
@@ -270,6 +311,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     const double t_event = w->sc->clock_step_s != 0.0 ? w->sc->clock_at_s : 0.0;
     int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     hstpf_theta_t bank[MAXM];
+    /* --oracle */
+    hstpf_t *fo = NULL;
+    hstpf_theta_t ob[ORACLE_ROWS + 1];
+    int oi[ORACLE_ROWS + 1], no = 0;
+    double ol[ORACLE_ROWS + 1] = {0}, sep_below = 0.0;
     int decl;                       /* the declared row as an index of w->models, -1 none */
     const int tq = w->sc->absent ? -1 : truth; /* the truth's index in the bank */
     if (f == NULL) {
@@ -380,6 +426,29 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             exit(1);
         }
     }
+    r->or_sep = -1.0;
+    r->or_llr_decl = r->or_llr_near_decl = NAN;
+    if (w->st->oracle) {
+        hstpf_config_t co = cfg;
+        hstpf_theta_t wt = sc.truth;
+        size_t wsn = 0;
+        wt.c0 += w->sc->grade_permille;
+        no = oracle_bank(w, truth, &wt, ob, oi);
+        co.models = ob;
+        co.n_models = (uint16_t)no;
+        co.refine = 0;
+        fo = malloc(sizeof *fo);
+        if (fo == NULL || hstpf_workspace_size(&co, &wsn) != HSTPF_OK) {
+            fprintf(stderr, "hstpf-mc: --oracle: no bank\n");
+            exit(1);
+        }
+        co.workspace = wsn > 0 ? malloc(wsn) : NULL;
+        co.workspace_size = wsn;
+        if (hstpf_init(fo, sizeof *fo, &co) != HSTPF_OK) {
+            fprintf(stderr, "hstpf-mc: --oracle: hstpf_init failed\n");
+            exit(1);
+        }
+    }
     hstpf_sim_init(&sim, &sc);
     if (trace) {
         fprintf(trace, "t,s_true,v_true,u,y,has_y,s_est,v_est,c0,c1,c2,declared,status,standstill,valid,"
@@ -414,6 +483,20 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                  * step, call hstpf_reacquire() and go on with the nominal
                  * step length: emulated exactly so */
                 (void)hstpf_reacquire(f);
+                if (fo) {
+                    (void)hstpf_reacquire(fo);
+                }
+            }
+        }
+        if (fo) {
+            hstpf_estimate_t eo;
+            (void)hstpf_step(fo, &in);
+            (void)hstpf_estimate(fo, &eo);
+            for (k = 0; k < no; ++k) {
+                ol[k] += isfinite((double)eo.model[k].loglik) ? (double)eo.model[k].loglik : 0.0;
+            }
+            if (no > 1 && ol[0] - ol[1] < LOG99) {
+                sep_below = smp.t;
             }
         }
         if (hstpf_step(f, &in) != HSTPF_OK) {
@@ -468,6 +551,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             r->false_decl = 1;
             r->false_time = est.decision_time_s;
             r->false_model = decl;
+            for (k = 1; fo && k < no; ++k) {
+                r->or_llr_decl = oi[k] == decl ? ol[0] - ol[k] : r->or_llr_decl;
+            }
+            r->or_llr_near_decl = fo && no > 1 ? ol[0] - ol[1] : NAN;
             /* the truth stood during the declaration's hold window */
             jr->false_at_rest = smp.t - last_rest_t <= w->st->base.declare_hold_s;
         }
@@ -509,6 +596,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             }
             fprintf(trace, ",%.6g,%d\n", (double)est.q_offtable, (int)est.fit);
         }
+    }
+    if (fo) {
+        r->or_sep = no > 1 && ol[0] - ol[1] >= LOG99 ? sep_below + 1.0 : -1.0;
+        free(fo->cfg.workspace);
+        free(fo);
     }
     n_after = n_after > 0.0 ? n_after : 1.0;
     r->pos_rms = sqrt(se_p / n_after);
@@ -822,12 +914,23 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
                         "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
                         "\"w_rms\":%.5g,\"band_covers\":%d,\"curve_covers\":%d,\"theta_nees\":%.4g,\"d_table\":%.4g,\"near_row\":\"%s\","
-                        "\"nofit_end\":%d,\"q_true_end\":%.4g,\"tv\":[",
+                        "\"nofit_end\":%d,\"q_true_end\":%.4g,",
                         i ? "," : "", w->first_seed + i, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
                         q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
                         r->w_rms, r->band_covers, r->curve_covers, r->theta_nees, r->d_table,
                         r->near_row >= 0 ? models[r->near_row].name : "", r->nofit_end, r->q_true_end);
+                if (w->st->oracle) { /* null: no wrong declaration, or its row not in the oracle's bank */
+                    char a[32] = "null", b[32] = "null";
+                    if (isfinite(r->or_llr_decl)) {
+                        snprintf(a, sizeof a, "%.4g", r->or_llr_decl);
+                    }
+                    if (isfinite(r->or_llr_near_decl)) {
+                        snprintf(b, sizeof b, "%.4g", r->or_llr_near_decl);
+                    }
+                    fprintf(jf, "\"oracle_sep\":%.0f,\"oracle_llr_decl\":%s,\"oracle_llr_near_decl\":%s,", r->or_sep, a, b);
+                }
+                fprintf(jf, "\"tv\":[");
                 for (k = 0; k < q->n_stops; ++k) {
                     fprintf(jf, "%s%.4g", k ? "," : "", q->tv[k]);
                 }
@@ -866,6 +969,62 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
 }
 
 #define OFF_TABLE_D 0.10 /* issue 10: a truth this far from every row is off the table */
+
+/* --oracle, over the runs >= OFF_TABLE_D off: when the truth's own theta
+ * leads its nearest row by log 99 for good, and how far it led the row
+ * wrongly declared when that was declared. A rule that refuses such a row
+ * on the data must wait at least until then. */
+/* A time or a ratio for print_oracle: "never" for an infinite time, "-" for none. */
+static const char *fmt_or(char *buf, size_t n, double x, const char *unit)
+{
+    if (x == HUGE_VAL) {
+        snprintf(buf, n, "never");
+    } else if (x == -1.0) {
+        snprintf(buf, n, "-");
+    } else {
+        snprintf(buf, n, "%.*f%s", strcmp(unit, " s") == 0 ? 0 : 2, x, unit);
+    }
+    return buf;
+}
+
+static void print_oracle(const work_t *w, int all)
+{
+    char b[6][24];
+    double *sep = malloc(sizeof(double) * (size_t)all), *llr = malloc(sizeof(double) * (size_t)all);
+    int i, nfar = 0, never = 0, nd = 0, nout = 0, below = 0, neg = 0;
+    if (sep == NULL || llr == NULL) {
+        fprintf(stderr, "out of memory\n");
+        exit(1);
+    }
+    for (i = 0; i < all; ++i) {
+        const run_t *r = &w->runs[i];
+        if (r->d_table < OFF_TABLE_D - 1e-9) {
+            continue;
+        }
+        never += r->or_sep < 0.0;
+        sep[nfar++] = r->or_sep < 0.0 ? HUGE_VAL : r->or_sep;
+        if (r->false_decl) {
+            if (!isfinite(r->or_llr_decl)) {
+                ++nout;
+                continue;
+            }
+            llr[nd++] = r->or_llr_decl;
+            below += r->or_llr_decl < LOG99;
+            neg += r->or_llr_decl < 0.0;
+        }
+    }
+    printf("oracle (the truth's own theta scored beside its %d nearest rows, the same engine, no hypothesis), runs >= "
+           "%.0f%% off: %d runs; the truth leads its nearest row by log 99 from the end of a median %s (p10 %s, "
+           "p90 %s) to the end, never in %d runs; a wrong row first declared in %d runs (%d not among the %d "
+           "nearest): the truth's log-likelihood ratio against it then median %s, p90 %s, max %s; below "
+           "log 99 in %d, below 0 in %d\n",
+           ORACLE_ROWS, 100.0 * OFF_TABLE_D, nfar, fmt_or(b[0], 24, pct(sep, nfar, 0.5), " s"),
+           fmt_or(b[1], 24, pct(sep, nfar, 0.1), " s"), fmt_or(b[2], 24, pct(sep, nfar, 0.9), " s"), never, nd + nout,
+           nout, ORACLE_ROWS, fmt_or(b[3], 24, pct(llr, nd, 0.5), " nats"), fmt_or(b[4], 24, pct(llr, nd, 0.9), " nats"),
+           fmt_or(b[5], 24, pct(llr, nd, 1.0), " nats"), below, neg);
+    free(sep);
+    free(llr);
+}
 
 /* Trains not on Table 1 (issue 10): W(v) error, the band, "no type fits"
  * and wrong declarations, over every run. */
@@ -918,6 +1077,9 @@ static void print_offtable(const work_t *w, int seeds)
            100.0 * OFF_TABLE_D, n[1], n[1] ? 100.0 * nf[1] / n[1] : 0.0, n[1] ? 100.0 * wr[1] / n[1] : 0.0,
            n[1] ? 100.0 * we[1] / n[1] : 0.0, 100.0 * OFF_TABLE_D, n[0], n[0] ? 100.0 * nf[0] / n[0] : 0.0,
            n[0] ? 100.0 * wr[0] / n[0] : 0.0, n[0] ? 100.0 * we[0] / n[0] : 0.0);
+    if (w->st->oracle) {
+        print_oracle(w, all);
+    }
     free(werr);
 }
 
@@ -940,6 +1102,8 @@ static void usage(void)
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine | --refine-any-noise] [--refine-prior Q] [--refine-spread X]\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
+            "  [--oracle]  (off-table scenarios: also score the truth's own theta beside its 4 nearest rows, to\n"
+            "              measure when the data can tell the truth from a row; not a filter setting)\n"
             "  [--speed-lattice | --no-speed-lattice]  (grid: the speed cells carried by each model's map, or remapped)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
@@ -982,6 +1146,10 @@ int main(int argc, char **argv)
         }
         if (!strcmp(a, "--gauss-e")) {
             st.gauss_e = 1;
+            continue;
+        }
+        if (!strcmp(a, "--oracle")) {
+            st.oracle = 1;
             continue;
         }
         if (!strcmp(a, "--speed-lattice") || !strcmp(a, "--no-speed-lattice")) {
