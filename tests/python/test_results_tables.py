@@ -121,3 +121,24 @@ def test_offtable_far_split(tmp_path):
     assert len(table) == 4
     assert table[2] == "| `off15` | on (default) | 1.64% / 4.52% | 78.9% | 98.5% | 21.9% | 950: 99.1%, 3.2% |"
     assert table[3].endswith("| 21.9% | - |")
+
+
+def test_oracle_rows(tmp_path):
+    # hstpf-mc --oracle's line, once with times and ratios, once with none ("never", "-")
+    line = ("oracle (the truth's own theta scored beside its 4 nearest rows, the same engine, no hypothesis), runs "
+            ">= 10% off: {n} runs; the truth leads its nearest row by log 99 from the end of a median {m} (p10 {a}, "
+            "p90 {b}) to the end, never in {nv} runs; a wrong row first declared in {d} runs ({o} not among the 4 "
+            "nearest): the truth's log-likelihood ratio against it then median {lm}, p90 {lp}, max {lx}; below log "
+            "99 in {bl}, below 0 in {bz}\n")
+    (tmp_path / "off15-case2.txt").write_text("trains off the table: ...\n" + line.format(
+        n=929, m="412 s", a="180 s", b="never", nv=120, d=116, o=3, lm="0.85 nats", lp="3.10 nats", lx="7.02 nats",
+        bl=110, bz=41))
+    (tmp_path / "off15.txt").write_text(line.format(
+        n=52, m="never", a="294 s", b="never", nv=34, d=0, o=0, lm="-", lp="-", lx="-", bl=0, bz=0))
+    (tmp_path / "absent.txt").write_text("trains off the table: no oracle line\n")
+    table = rt.oracle(tmp_path, ["off15", "absent", "off15-case2", "mass20"]).splitlines()
+    assert len(table) == 4  # header, rule, off15, off15-case2
+    assert table[2] == "| `off15` | 52 | never (294 s, never) | 34 | 0 (0) | - / - / - | 0 | 0 |"
+    assert table[3] == ("| `off15-case2` | 929 | 412 s (180 s, never) | 120 | 116 (3) | 0.85 nats / 3.10 nats / "
+                        "7.02 nats | 110 | 41 |")
+    assert rt.oracle(tmp_path, ["absent"]) == ""

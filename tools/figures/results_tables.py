@@ -87,6 +87,28 @@ def offtable(d: Path, names=None) -> str:
     return "\n".join(out)
 
 
+def oracle(d: Path, names) -> str:
+    """hstpf-mc --oracle's line (runs >= 10 % from every row): when the
+    truth's own theta leads its nearest row by log 99 for good, and its
+    log-likelihood ratio against a row wrongly declared, at the declaration.
+    Empty when no output of names has the line."""
+    out = ["| scenario | runs >= 10 % off | the truth leads its nearest row by log 99 for good from: median (p10, "
+           "p90) | never | a wrong row declared (not among the 4 nearest) | the truth's log-likelihood ratio against "
+           "it then: median / p90 / max | below log 99 | below 0 |", "|---|---|---|---|---|---|---|---|"]
+    for s in names:
+        f = d / f"{s}.txt"
+        t = last(f, "oracle (", missing="") if f.exists() else ""
+        if not t:
+            continue
+        out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} / {} / {} | {} | {} |".format(
+            s, num(r"off: (\d+) runs", t), num(r"from the end of a median ([^ ]+(?: s)?) \(", t),
+            num(r"\(p10 ([^,]+),", t), num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t),
+            num(r"first declared in (\d+) runs", t), num(r"\((\d+) not among", t),
+            num(r"then median ([^,]+),", t), num(r"then median [^,]+, p90 ([^,]+),", t),
+            num(r", max ([^;]+);", t), num(r"below log 99 in (\d+)", t), num(r"below 0 in (\d+)", t)))
+    return "\n".join(out) if len(out) > 2 else ""
+
+
 def prior(d: Path) -> str:
     """The continuous hypothesis's prior weight: identification on the table
     (Case 1's decision, all17's success) against off-table declarations and
@@ -236,6 +258,10 @@ def main(argv=None) -> int:
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_CASE2):
             print("\n### Trains not on Table 1 under Case 2 noise (grid engine)\n")
             print(offtable(d, OFFTABLE_CASE2))
+        ot = oracle(d, OFFTABLE + OFFTABLE_CASE2)
+        if ot:
+            print("\n### When the data can tell an off-table truth from a row (hstpf-mc --oracle)\n")
+            print(ot)
         print("\n### The continuous hypothesis's prior weight\n")
         print(prior(d))
         print("\n### The rows' spread\n")
