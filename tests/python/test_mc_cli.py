@@ -54,3 +54,17 @@ def test_oracle_measures_without_touching_the_filter(mc, tmp_path):
         assert run["oracle_sep"] == -1 or 0 <= run["oracle_sep"] <= 601
         if not run["false_decl"]:
             assert run["oracle_llr_decl"] is None and run["oracle_llr_near_decl"] is None
+
+
+def test_oracle_on_the_table(mc, tmp_path):
+    """On the table the oracle scores trains 10 % from the truth's row; the
+    table is the same with it, one line more."""
+    args = ["--scenario", "paper1", "--seeds", "2", "--duration", "300", "--threads", "1"]
+    plain = subprocess.run([mc, *args], capture_output=True, text=True, check=True).stdout.splitlines()
+    r = subprocess.run([mc, *args, "--oracle", "--json", str(tmp_path / "o.json")], capture_output=True,
+                       text=True, check=True)
+    lines = r.stdout.splitlines()
+    assert lines[:-1] == plain
+    assert lines[-1].startswith("oracle (8 trains 10% from the truth's row") and "2 runs;" in lines[-1]
+    for run in json.loads((tmp_path / "o.json").read_text())["results"][0]["runs"]:
+        assert run["oracle_sep"] == -1 or 0 <= run["oracle_sep"] <= 301
