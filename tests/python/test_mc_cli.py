@@ -46,8 +46,9 @@ def test_oracle_measures_without_touching_the_filter(mc, tmp_path):
     out = tmp_path / "o.json"
     r = subprocess.run([mc, *OFF, "--oracle", "--json", str(out)], capture_output=True, text=True, check=True)
     lines = r.stdout.splitlines()
-    assert lines[:-1] == plain  # one line more, nothing else changed
-    assert lines[-1].startswith("oracle (the truth's own theta")
+    assert lines[:-2] == plain  # two lines more, nothing else changed
+    assert lines[-2].startswith("oracle (the truth's own theta")
+    assert lines[-1].startswith("oracle, the nearest row against 8 trains 10% from it")
     runs = json.loads(out.read_text())["results"][0]["runs"]
     assert len(runs) == 3
     for run in runs:
@@ -58,13 +59,14 @@ def test_oracle_measures_without_touching_the_filter(mc, tmp_path):
 
 def test_oracle_on_the_table(mc, tmp_path):
     """On the table the oracle scores trains 10 % from the truth's row; the
-    table is the same with it, one line more."""
+    table is the same with it, two lines more."""
     args = ["--scenario", "paper1", "--seeds", "2", "--duration", "300", "--threads", "1"]
     plain = subprocess.run([mc, *args], capture_output=True, text=True, check=True).stdout.splitlines()
     r = subprocess.run([mc, *args, "--oracle", "--json", str(tmp_path / "o.json")], capture_output=True,
                        text=True, check=True)
     lines = r.stdout.splitlines()
-    assert lines[:-1] == plain
-    assert lines[-1].startswith("oracle (8 trains 10% from the truth's row") and "2 runs;" in lines[-1]
+    assert lines[:-2] == plain
+    assert lines[-2].startswith("oracle (8 trains 10% from the truth's row") and "2 runs;" in lines[-2]
+    assert lines[-1].startswith("oracle, paired with the declaration")
     for run in json.loads((tmp_path / "o.json").read_text())["results"][0]["runs"]:
         assert run["oracle_sep"] == -1 or 0 <= run["oracle_sep"] <= 301
