@@ -1086,10 +1086,6 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
 
 #define OFF_TABLE_D 0.10 /* issue 10: a truth this far from every row is off the table */
 
-/* --oracle, over the runs >= OFF_TABLE_D off: when the truth's own theta
- * leads its nearest row by log 99 for good, and how far it led the row
- * wrongly declared when that was declared. A rule that refuses such a row
- * on the data must wait at least until then. */
 #define ORACLE_ENGINE(w) ((w)->st->oracle == 2 ? "the Kalman engine on the noises' mean and sd" : "the same engine")
 
 /* The p-quantile of v[0..n) for print_oracle: "never" for an infinite
@@ -1165,13 +1161,17 @@ static void print_oracle_on(const work_t *w, int all)
     free(dd);
 }
 
+/* --oracle, over the runs >= OFF_TABLE_D off: when the truth's own theta
+ * leads its nearest row by log 99 for good, and how far it led the row
+ * wrongly declared when that was declared. A rule that refuses such a row
+ * on the data must wait at least until then. */
 static void print_oracle(const work_t *w, int all)
 {
     char b[6][24];
     double *sep = malloc(sizeof(double) * (size_t)all), *llr = malloc(sizeof(double) * (size_t)all);
     int i, nfar = 0, never = 0, nd = 0, nout = 0, below = 0, neg = 0, nnb = 0, nnd = 0, nnbd = 0, nother = 0;
     double *tnb = malloc(sizeof(double) * (size_t)all);
-    if (sep == NULL || llr == NULL) {
+    if (sep == NULL || llr == NULL || tnb == NULL) {
         fprintf(stderr, "out of memory\n");
         exit(1);
     }
