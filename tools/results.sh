@@ -113,6 +113,13 @@ for s in off15-case2 grade8-case2 mass20-case2 absent-case2; do
   "$mc" --scenario "$s" --seeds "$oseeds" --oracle --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds 10 --first-seed 11 --no-refine --json "$out/$s-norefine.json" | tee "$out/$s-norefine.txt"
 done
+echo "== what the data allow (hstpf-mc --oracle): on the table, when the row leads every train 10 % from it"
+echo "   by log 99 (the off-table runs above carry their own oracle lines); docs/results.md, Seventeenth session"
+for s in paper1 paper2 all17 stops; do
+  "$mc" --scenario "$s" --seeds "$seeds" --oracle | tee "$out/$s-oracle.txt"
+done
+"$mc" --scenario paper2 --seeds "$seeds" --oracle-gauss | tee "$out/paper2-oracle-gauss.txt"
+"$mc" --scenario all17-case2 --seeds "${HSTPF_ORACLE17_SEEDS:-20}" --oracle | tee "$out/all17-case2-oracle.txt"
 echo "== issue 13's journey: the line with stops, Case 2 noise, 17 types (the grid engine by default)"
 "$mc" --scenario stops-case2 --seeds "$gseeds" --json "$out/stops-case2.json" | tee "$out/stops-case2.txt"
 # HSTPF_EVENTS_CASE2_SEEDS: their seeds per truth (20; docs/results.md's figures are at 100, about 20 min each)
