@@ -138,7 +138,46 @@ def test_oracle_rows(tmp_path):
     (tmp_path / "absent.txt").write_text("trains off the table: no oracle line\n")
     table = rt.oracle(tmp_path, ["off15", "absent", "off15-case2", "mass20"]).splitlines()
     assert len(table) == 4  # header, rule, off15, off15-case2
-    assert table[2] == "| `off15` | 52 | never (294 s, never) | 34 | 0 (0) | - / - / - | 0 | 0 |"
+    assert table[2] == "| `off15` | 52 | never (294 s, never) | 34 | 0 (0) | - / - / - | 0 | 0 | - | - |"
     assert table[3] == ("| `off15-case2` | 929 | 412 s (180 s, never) | 120 | 116 (3) | 0.85 nats / 3.10 nats / "
-                        "7.02 nats | 110 | 41 |")
+                        "7.02 nats | 110 | 41 | - | - |")
     assert rt.oracle(tmp_path, ["absent"]) == ""
+
+
+def test_oracle_neighbour_columns(tmp_path):
+    # the second off-table oracle line: the nearest row against its eight trains 10 % off
+    first = ("oracle (the truth's own theta scored beside its 4 nearest rows, the same engine, no hypothesis), runs "
+             ">= 10% off: 409 runs; the truth leads its nearest row by log 99 from the end of a median 66 s (p10 38 s, "
+             "p90 142 s) to the end, never in 0 runs; a wrong row first declared in 27 runs (2 not among the 4 "
+             "nearest): the truth's log-likelihood ratio against it then median 5.27 nats, p90 21.75 nats, max 3745.03 "
+             "nats; below log 99 in 11, below 0 in 2\n")
+    nb = ("oracle, the nearest row against 8 trains 10% from it in W(v) (the test of the on-table line): it leads all "
+          "8 by log 99 at some step in 73 of 409 runs (first at a median 190 s); the filter declared the nearest row "
+          "in 22 runs (not the truth's own row), and in 15 of them at a step where the row led all 8 (a rule that "
+          "also asks this test would have declared it); another row (not tested) in 5\n")
+    (tmp_path / "mass20-case2.txt").write_text(first + nb)
+    row = rt.oracle(tmp_path, ["mass20-case2"]).splitlines()[2]
+    assert row.endswith("| 11 | 2 | 73 runs | 22 / 15 |")
+
+
+def test_oracle_on_the_table_rows(tmp_path):
+    on = ("oracle (8 trains 10% from the truth's row in W(v), one per sign pattern of c0, c1, c2, scored beside it, "
+          "{eng}, no hypothesis): 100 runs; the row leads all 8 by log 99 from the end of a median {m} (p10 {a}, "
+          "p90 {b}) to the end, never in {nv} runs; the truth declared (and so at the end) in 100 runs, at a median "
+          "197 s (p90 216 s, max 273 s), before the row led all 8 for good in {bf}\n")
+    paired = ("oracle, paired with the declaration (runs with both): excluded all 8 minus declared median 27 s (min -45 "
+              "s, max 148 s) in 100 runs; counting their evidence only from when the row took the lead for good (a "
+              "median 115 s): excluded from a median 229 s (p90 252 s), never in 0 of 100 runs; minus declared "
+              "median 31 s in 100 runs\n")
+    (tmp_path / "paper2-oracle.txt").write_text("CRH3 ...\n" + on.format(
+        eng="the same engine", m="228 s", a="192 s", b="248 s", nv=0, bf=84) + paired)
+    (tmp_path / "paper1-oracle.txt").write_text(on.format(
+        eng="the same engine", m="never", a="never", b="never", nv=100, bf=100))
+    (tmp_path / "paper2-oracle-gauss.txt").write_text(on.format(
+        eng="the Kalman engine on the noises' mean and sd", m="291 s", a="276 s", b="315 s", nv=0, bf=100))
+    table = rt.oracle_on(tmp_path).splitlines()
+    assert len(table) == 5  # header, rule, paper1, paper2, the moments
+    assert table[2] == "| `paper1` | 100 | never (never, never) | 100 | 197 s (216 s) | 100 | - | - |"
+    assert table[3] == "| `paper2` | 100 | 228 s (192 s, 248 s) | 0 | 197 s (216 s) | 84 | 27 s | 229 s (252 s); 31 s |"
+    assert table[4].startswith("| `paper2-oracle-gauss` | 100 | 291 s (276 s, 315 s) | 0 |")
+    assert rt.oracle_on(tmp_path / "none") == ""

@@ -94,18 +94,52 @@ def oracle(d: Path, names) -> str:
     Empty when no output of names has the line."""
     out = ["| scenario | runs >= 10 % off | the truth leads its nearest row by log 99 for good from: median (p10, "
            "p90) | never | a wrong row declared (not among the 4 nearest) | the truth's log-likelihood ratio against "
-           "it then: median / p90 / max | below log 99 | below 0 |", "|---|---|---|---|---|---|---|---|"]
+           "it then: median / p90 / max | below log 99 | below 0 | the nearest row leads its 8 trains 10 % off at "
+           "some step | the nearest row wrongly declared / at a step where it led its 8 |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
     for s in names:
         f = d / f"{s}.txt"
         t = last(f, "oracle (", missing="") if f.exists() else ""
         if not t:
             continue
-        out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} / {} / {} | {} | {} |".format(
+        nb = last(f, "oracle, the nearest row against", missing="")
+        nbs = ("{} runs".format(num(r"at some step in (\d+) of", nb)),
+               "{} / {}".format(num(r"declared the nearest row in (\d+) runs", nb), num(r"and in (\d+) of them", nb))
+               ) if nb else ("-", "-")
+        out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} / {} / {} | {} | {} | {} | {} |".format(
             s, num(r"off: (\d+) runs", t), num(r"from the end of a median ([^ ]+(?: s)?) \(", t),
             num(r"\(p10 ([^,]+),", t), num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t),
             num(r"first declared in (\d+) runs", t), num(r"\((\d+) not among", t),
             num(r"then median ([^,]+),", t), num(r"then median [^,]+, p90 ([^,]+),", t),
-            num(r", max ([^;]+);", t), num(r"below log 99 in (\d+)", t), num(r"below 0 in (\d+)", t)))
+            num(r", max ([^;]+);", t), num(r"below log 99 in (\d+)", t), num(r"below 0 in (\d+)", t), *nbs))
+    return "\n".join(out) if len(out) > 2 else ""
+
+
+ORACLE_ON = ["paper1", "paper2", "all17", "stops", "all17-case2"]
+
+
+def oracle_on(d: Path) -> str:
+    """hstpf-mc --oracle on the table (out/results/S-oracle.txt, and paper2 on
+    the noises' moments): when the row leads every train 10 % from it by log
+    99, beside today's declaration. Empty when none ran."""
+    out = ["| scenario | runs | the row leads all 8 by log 99 for good from: median (p10, p90) | never | today's "
+           "declaration: median (p90) | declared before that | paired: excluded minus declared, median | counted "
+           "from the lead: excluded from, median (p90); paired |", "|---|---|---|---|---|---|---|---|"]
+    for s in ORACLE_ON + ["paper2-oracle-gauss"]:
+        f = d / (f"{s}.txt" if s.endswith("gauss") else f"{s}-oracle.txt")
+        t = last(f, "oracle (", missing="") if f.exists() else ""
+        if not t:
+            continue
+        p = last(f, "oracle, paired", missing="")
+        out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} | {} | {} |".format(
+            s, num(r"no hypothesis\): (\d+) runs", t), num(r"from the end of a median ([^ ]+(?: s)?) \(", t),
+            num(r"\(p10 ([^,]+),", t), num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t),
+            num(r"at a median ([^ ]+(?: s)?) \(p90", t), num(r"at a median [^(]+\(p90 ([^,]+),", t),
+            num(r"before the row led all 8 for good in (\d+)", t),
+            num(r"minus declared median ([^ ]+(?: s)?) \(min", p) if p else "-",
+            "{} ({}); {}".format(num(r"excluded from a median ([^ ]+(?: s)?) \(", p),
+                                 num(r"excluded from a median [^(]+\(p90 ([^)]+)\)", p),
+                                 num(r"minus declared median ([^ ]+(?: s)?) in \d+ runs\n?$", p)) if p else "-"))
     return "\n".join(out) if len(out) > 2 else ""
 
 
@@ -258,6 +292,10 @@ def main(argv=None) -> int:
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_CASE2):
             print("\n### Trains not on Table 1 under Case 2 noise (grid engine)\n")
             print(offtable(d, OFFTABLE_CASE2))
+        ot = oracle_on(d)
+        if ot:
+            print("\n### When the data exclude trains 10 % from the row (hstpf-mc --oracle, on the table)\n")
+            print(ot)
         ot = oracle(d, OFFTABLE + OFFTABLE_CASE2)
         if ot:
             print("\n### When the data can tell an off-table truth from a row (hstpf-mc --oracle)\n")
