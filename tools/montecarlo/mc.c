@@ -262,6 +262,22 @@ static int table_index(const work_t *w, int truth, int b)
     return b < 0 ? -1 : (w->sc->absent && b >= truth ? b + 1 : b);
 }
 
+/* The noise sp replaced by a Gaussian of its mean and sd; opt names the
+ * option that asked, for the message when sp does not build. */
+static void gauss_of(hstpf_dist_spec_t *sp, const char *opt)
+{
+    hstpf_dist_t *d = malloc(sizeof *d);
+    if (d == NULL || hstpf_dist_init(d, sp) != HSTPF_OK) {
+        fprintf(stderr, "hstpf-mc: %s: a noise does not build\n", opt);
+        exit(1);
+    }
+    memset(sp, 0, sizeof *sp);
+    sp->kind = HSTPF_DIST_GAUSSIAN;
+    sp->mean = (double)d->qt.mean;
+    sp->sd = (double)d->qt.sd;
+    free(d);
+}
+
 #define ORACLE_ROWS 4 /* the rows nearest the truth scored in the oracle's bank */
 #define ORACLE_NEAR 0.10 /* on the table: trains this far from the truth's row in W(v) */
 #define ORACLE_MAX 13 /* the larger of the two banks */
@@ -279,15 +295,13 @@ static void neighbours(const hstpf_theta_t *row, hstpf_theta_t *ob, int *oi)
 {
     int k;
     for (k = 0; k < 8; ++k) {
-        hstpf_theta_t a = *row;
-        double e;
-        a.c0 *= 1.0 + ((k & 1) ? 0.1 : -0.1);
-        a.c1 *= 1.0 + ((k & 2) ? 0.1 : -0.1);
-        a.c2 *= 1.0 + ((k & 4) ? 0.1 : -0.1);
-        e = 0.1 * ORACLE_NEAR / w_dist_row(&a, row); /* the distance is linear in the perturbation */
-        ob[k].c0 = row->c0 * (1.0 + ((k & 1) ? e : -e));
-        ob[k].c1 = row->c1 * (1.0 + ((k & 2) ? e : -e));
-        ob[k].c2 = row->c2 * (1.0 + ((k & 4) ? e : -e));
+        const double s0 = (k & 1) ? 1.0 : -1.0, s1 = (k & 2) ? 1.0 : -1.0, s2 = (k & 4) ? 1.0 : -1.0;
+        hstpf_theta_t a = {row->name, row->c0 * (1.0 + 0.1 * s0), row->c1 * (1.0 + 0.1 * s1), row->c2 * (1.0 + 0.1 * s2)};
+        const double e = 0.1 * ORACLE_NEAR / w_dist_row(&a, row); /* the distance is linear in the perturbation */
+        a.c0 = row->c0 * (1.0 + e * s0);
+        a.c1 = row->c1 * (1.0 + e * s1);
+        a.c2 = row->c2 * (1.0 + e * s2);
+        ob[k] = a;
         oi[k] = -1;
     }
 }
@@ -360,9 +374,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     hstpf_theta_t ob[ORACLE_MAX];
     int oi[ORACLE_MAX], no = 0;
     double ol[ORACLE_MAX] = {0}, sep_below = 0.0;
-    double *oh = NULL, *otm = NULL; /* on the table: ol and the time at each step */
-    long nsteps = 0, i_lead = 0;
-    int nb_pass = 0;
+    /* on the table: ol when the truth's row last took the lead, and the
+     * last step its lead over the 8 counted from there was short of log 99 */
+    double ol_lead[ORACLE_MAX] = {0}, lead_t = -1.0, lead_below = 0.0;
+    int nb_pass = 0, nsep = 0, led = 0;
+    const int ontab = on_table(w->sc);
     int decl;                       /* the declared row as an index of w->models, -1 none */
     const int tq = w->sc->absent ? -1 : truth; /* the truth's index in the bank */
     if (f == NULL) {
@@ -426,16 +442,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     cfg.noise_e = sc.noise_e;
     if (w->st->gauss_e && cfg.noise_e.kind != HSTPF_DIST_GAUSSIAN) {
         /* a filter that knows only the variance: what knowing the density buys */
-        hstpf_dist_t *de = malloc(sizeof *de);
-        if (de == NULL || hstpf_dist_init(de, &cfg.noise_e) != HSTPF_OK) {
-            fprintf(stderr, "hstpf-mc: --gauss-e: the position noise does not build\n");
-            exit(1);
-        }
-        memset(&cfg.noise_e, 0, sizeof cfg.noise_e);
-        cfg.noise_e.kind = HSTPF_DIST_GAUSSIAN;
-        cfg.noise_e.mean = (double)de->qt.mean;
-        cfg.noise_e.sd = (double)de->qt.sd;
-        free(de);
+        gauss_of(&cfg.noise_e, "--gauss-e");
     }
     if (w->st->floor_set) {
         cfg.noise_e.floor_depth = w->st->floor_depth;
@@ -485,19 +492,9 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         co.n_models = (uint16_t)no;
         co.refine = 0;
         if (w->st->oracle == 2) { /* the Kalman engine on each noise's mean and sd: what a cheap test sees */
-            hstpf_dist_spec_t *sp[3] = {&co.noise_s, &co.noise_v, &co.noise_e};
-            hstpf_dist_t *dd = malloc(sizeof *dd);
-            for (k = 0; k < 3; ++k) {
-                if (dd == NULL || hstpf_dist_init(dd, sp[k]) != HSTPF_OK) {
-                    fprintf(stderr, "hstpf-mc: --oracle-gauss: a noise does not build\n");
-                    exit(1);
-                }
-                memset(sp[k], 0, sizeof *sp[k]);
-                sp[k]->kind = HSTPF_DIST_GAUSSIAN;
-                sp[k]->mean = (double)dd->qt.mean;
-                sp[k]->sd = (double)dd->qt.sd;
-            }
-            free(dd);
+            gauss_of(&co.noise_s, "--oracle-gauss");
+            gauss_of(&co.noise_v, "--oracle-gauss");
+            gauss_of(&co.noise_e, "--oracle-gauss");
             co.engine = HSTPF_ENGINE_KALMAN;
         }
         fo = malloc(sizeof *fo);
@@ -507,15 +504,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         }
         co.workspace = wsn > 0 ? malloc(wsn) : NULL;
         co.workspace_size = wsn;
-        if (on_table(w->sc)) {
-            const size_t cap = (size_t)(w->sc->duration_s + 64.0);
-            oh = malloc(sizeof(double) * cap * ORACLE_MAX);
-            otm = malloc(sizeof(double) * cap);
-            if (oh == NULL || otm == NULL) {
-                fprintf(stderr, "out of memory\n");
-                exit(1);
-            }
-        }
+        /* the truth's lead for good: off the table over its nearest row, on it over every one of the 8 */
+        nsep = ontab ? no : (no > 1 ? 2 : 1);
         if (hstpf_init(fo, sizeof *fo, &co) != HSTPF_OK) {
             fprintf(stderr, "hstpf-mc: --oracle: hstpf_init failed\n");
             exit(1);
@@ -567,7 +557,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             for (k = 0; k < no; ++k) {
                 ol[k] += isfinite((double)eo.model[k].loglik) ? (double)eo.model[k].loglik : 0.0;
             }
-            if (!on_table(w->sc) && no > 9) { /* the nearest row against its eight */
+            if (!ontab && no > 9) { /* the nearest row against its eight */
                 int pass = 1, kk;
                 for (kk = no - 8; kk < no; ++kk) {
                     pass &= ol[1] - ol[kk] >= LOG99;
@@ -577,8 +567,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 }
                 nb_pass = pass;
             }
-            for (k = 1; k < (on_table(w->sc) ? no : (no > 1 ? 2 : 1)); ++k) {
-                if (ol[0] - ol[k] < LOG99) { /* off: the nearest row; on: every alternative */
+            for (k = 1; k < nsep; ++k) {
+                if (ol[0] - ol[k] < LOG99) {
                     sep_below = smp.t;
                 }
             }
@@ -632,14 +622,25 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             at_rest = 0;
         }
         qt = tq >= 0 ? (double)est.model[tq].q : 0.0;
-        if (oh != NULL && nsteps < (long)(w->sc->duration_s + 64.0)) {
+        if (fo && ontab) {
             int lead = 0;
             for (k = 1; k < w->n_models; ++k) {
                 lead = est.model[k].q > est.model[lead].q ? k : lead;
             }
-            memcpy(oh + nsteps * ORACLE_MAX, ol, sizeof ol);
-            otm[nsteps++] = smp.t;
-            i_lead = lead == tq ? i_lead : nsteps; /* the first step after the last one it did not lead */
+            if (lead != tq) {
+                led = 0;
+            } else {
+                if (!led) { /* a test of the 8 started now */
+                    led = 1;
+                    memcpy(ol_lead, ol, sizeof ol);
+                    lead_t = smp.t;
+                }
+                for (k = 1; k < no; ++k) {
+                    if ((ol[0] - ol_lead[0]) - (ol[k] - ol_lead[k]) < LOG99) {
+                        lead_below = smp.t;
+                    }
+                }
+            }
         }
         if (!(qt > thr)) {
             last_below = smp.t;
@@ -696,25 +697,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     }
     if (fo) {
         r->or_sep = no > 1 && sep_below < smp.t ? sep_below + 1.0 : -1.0;
-        if (oh != NULL && i_lead < nsteps) {
-            /* a test that starts the 8 trains when the row takes the lead:
-             * their evidence from that step on */
-            const double *o0 = oh + i_lead * ORACLE_MAX;
-            long i;
-            double below = otm[i_lead];
-            r->or_lead = otm[i_lead];
-            for (i = i_lead; i < nsteps; ++i) {
-                const double *oi_ = oh + i * ORACLE_MAX;
-                for (k = 1; k < no; ++k) {
-                    if ((oi_[0] - o0[0]) - (oi_[k] - o0[k]) < LOG99) {
-                        below = otm[i];
-                    }
-                }
-            }
-            r->or_sep_lead = below < otm[nsteps - 1] ? below + 1.0 : -1.0;
+        if (led) { /* the row led at the end: its test of the 8 from when it took the lead for good */
+            r->or_lead = lead_t;
+            r->or_sep_lead = lead_below < smp.t ? lead_below + 1.0 : -1.0;
         }
-        free(oh);
-        free(otm);
         free(fo->cfg.workspace);
         free(fo);
     }
@@ -1297,8 +1283,9 @@ static void usage(void)
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine | --refine-any-noise] [--refine-prior Q] [--refine-spread X]\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
-            "  [--oracle]  (off-table scenarios: also score the truth's own theta beside its 4 nearest rows, to\n"
-            "              measure when the data can tell the truth from a row; not a filter setting)\n"
+            "  [--oracle]  (a second bank on the same inputs: off the table the truth's own theta beside its 4 nearest\n"
+            "              rows, on it the truth's row beside 8 trains 10 %% from it; when the data tell them apart.\n"
+            "              Not a filter setting)\n"
             "  [--oracle-gauss]  (the same on the Kalman engine with each noise a Gaussian of its mean and sd)\n"
             "  [--speed-lattice | --no-speed-lattice]  (grid: the speed cells carried by each model's map, or remapped)\n"
             "scenarios:");
