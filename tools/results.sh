@@ -23,12 +23,16 @@ for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-kn
   echo "== $s"
   trace=()
   case $s in paper1|paper2) trace=(--trace "$out/trace_$s.csv") ;; esac
-  "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
+  oracle=()
+  case $s in paper1|paper2|all17) oracle=(--oracle) ;; esac # the on-table oracle (below) rides along
+  "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" "${oracle[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
 done
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
 for s in stops day start300 clock+30 clock-30 outage gain5; do
   echo "== $s"
-  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  oracle=()
+  case $s in stops) oracle=(--oracle) ;; esac
+  "$mc" --scenario "$s" --seeds "$seeds" "${oracle[@]}" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"
 for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
@@ -115,8 +119,8 @@ for s in off15-case2 grade8-case2 mass20-case2 absent-case2; do
 done
 echo "== what the data allow (hstpf-mc --oracle): on the table, when the row leads every train 10 % from it"
 echo "   by log 99 (the off-table runs above carry their own oracle lines); docs/results.md, Seventeenth session"
-for s in paper1 paper2 all17 stops; do
-  "$mc" --scenario "$s" --seeds "$seeds" --oracle | tee "$out/$s-oracle.txt"
+for s in paper1 paper2 all17 stops; do # run above with --oracle: their oracle lines
+  grep '^oracle' "$out/$s.txt" | tee "$out/$s-oracle.txt"
 done
 "$mc" --scenario paper2 --seeds "$seeds" --oracle-gauss | tee "$out/paper2-oracle-gauss.txt"
 "$mc" --scenario all17-case2 --seeds "${HSTPF_ORACLE17_SEEDS:-20}" --oracle | tee "$out/all17-case2-oracle.txt"

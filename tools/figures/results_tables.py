@@ -22,6 +22,10 @@ BAND = r"covers the truth at 68 of 71 speeds in ([\d.]+%)|covers the truth in ([
 
 
 def last(path: Path, prefix: str, missing: str = None) -> str:
+    """The last line of path starting with prefix; missing (when given) for
+    no such line or no such file."""
+    if missing is not None and not path.exists():
+        return missing
     lines = [ln for ln in path.read_text().splitlines() if ln.startswith(prefix)]
     if not lines:
         if missing is not None:
@@ -87,6 +91,13 @@ def offtable(d: Path, names=None) -> str:
     return "\n".join(out)
 
 
+def lead_cols(t: str):
+    """An oracle line's "leads ... by log 99 from the end of a median M (p10
+    A, p90 B) to the end, never in N runs": M, A, B, N."""
+    return (num(r"from the end of a median ([^ ]+(?: s)?) \(", t), num(r"\(p10 ([^,]+),", t),
+            num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t))
+
+
 def oracle(d: Path, names) -> str:
     """hstpf-mc --oracle's line (runs >= 10 % from every row): when the
     truth's own theta leads its nearest row by log 99 for good, and its
@@ -99,7 +110,7 @@ def oracle(d: Path, names) -> str:
            "|---|---|---|---|---|---|---|---|---|---|"]
     for s in names:
         f = d / f"{s}.txt"
-        t = last(f, "oracle (", missing="") if f.exists() else ""
+        t = last(f, "oracle (", missing="")
         if not t:
             continue
         nb = last(f, "oracle, the nearest row against", missing="")
@@ -107,15 +118,16 @@ def oracle(d: Path, names) -> str:
                "{} / {}".format(num(r"declared the nearest row in (\d+) runs", nb), num(r"and in (\d+) of them", nb))
                ) if nb else ("-", "-")
         out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} / {} / {} | {} | {} | {} | {} |".format(
-            s, num(r"off: (\d+) runs", t), num(r"from the end of a median ([^ ]+(?: s)?) \(", t),
-            num(r"\(p10 ([^,]+),", t), num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t),
+            s, num(r"off: (\d+) runs", t), *lead_cols(t),
             num(r"first declared in (\d+) runs", t), num(r"\((\d+) not among", t),
             num(r"then median ([^,]+),", t), num(r"then median [^,]+, p90 ([^,]+),", t),
             num(r", max ([^;]+);", t), num(r"below log 99 in (\d+)", t), num(r"below 0 in (\d+)", t), *nbs))
     return "\n".join(out) if len(out) > 2 else ""
 
 
-ORACLE_ON = ["paper1", "paper2", "all17", "stops", "all17-case2"]
+# scenario, its output (tools/results.sh)
+ORACLE_ON = [(s, f"{s}-oracle.txt") for s in ["paper1", "paper2", "all17", "stops", "all17-case2"]] + [
+    ("paper2-oracle-gauss", "paper2-oracle-gauss.txt")]
 
 
 def oracle_on(d: Path) -> str:
@@ -125,15 +137,14 @@ def oracle_on(d: Path) -> str:
     out = ["| scenario | runs | the row leads all 8 by log 99 for good from: median (p10, p90) | never | today's "
            "declaration: median (p90) | declared before that | paired: excluded minus declared, median | counted "
            "from the lead: excluded from, median (p90); paired |", "|---|---|---|---|---|---|---|---|"]
-    for s in ORACLE_ON + ["paper2-oracle-gauss"]:
-        f = d / (f"{s}.txt" if s.endswith("gauss") else f"{s}-oracle.txt")
-        t = last(f, "oracle (", missing="") if f.exists() else ""
+    for s, name in ORACLE_ON:
+        f = d / name
+        t = last(f, "oracle (", missing="")
         if not t:
             continue
         p = last(f, "oracle, paired", missing="")
         out.append("| `{}` | {} | {} ({}, {}) | {} | {} ({}) | {} | {} | {} |".format(
-            s, num(r"no hypothesis\): (\d+) runs", t), num(r"from the end of a median ([^ ]+(?: s)?) \(", t),
-            num(r"\(p10 ([^,]+),", t), num(r"p90 ([^)]+)\) to the end", t), num(r"never in (\d+) runs", t),
+            s, num(r"no hypothesis\): (\d+) runs", t), *lead_cols(t),
             num(r"at a median ([^ ]+(?: s)?) \(p90", t), num(r"at a median [^(]+\(p90 ([^,]+),", t),
             num(r"before the row led all 8 for good in (\d+)", t),
             num(r"minus declared median ([^ ]+(?: s)?) \(min", p) if p else "-",
