@@ -43,6 +43,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->refine_spread = 0.3; /* docs/model.md, "Prior" */
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
     cfg->grid_speed_lattice = 1; /* docs/grid.md, "The speed lattice" */
+    cfg->grid_rows = 3; /* docs/grid.md, "Rows on the grid" */
     return HSTPF_OK;
 }
 
@@ -161,6 +162,9 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     }
     if (c->grid_speed_lattice > 1u) {
         return fail(field, "grid_speed_lattice", HSTPF_E_CONFIG);
+    }
+    if (c->grid_rows > HSTPF_MAX_MODELS) {
+        return fail(field, "grid_rows", HSTPF_E_CONFIG);
     }
     if (c->refine > 2u) {
         return fail(field, "refine", HSTPF_E_CONFIG);

@@ -72,6 +72,10 @@ void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
  * measurement was beyond the floor. */
 double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, uint8_t *held, int *floored);
 
+/* A row's Kalman filter state published into s_mean, v_mean, s_var,
+ * v_var, ess (the Kalman engine's rows). */
+void hstpf__kalman_publish(const hstpf_t *f, hstpf_model_t *m);
+
 /* The engine of a validated configuration (AUTO resolved). */
 hstpf_engine_t hstpf__engine_resolve(const hstpf_config_t *cfg);
 

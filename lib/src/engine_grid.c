@@ -118,20 +118,104 @@ void hstpf__grid_moments(hstpf_t *f, hstpf_model_t *m, uint16_t l)
     m->ess = (real)(q2 > 0.0 ? 1.0 / q2 : 0.0);
 }
 
-/* The grid models: the rows, and the continuous hypothesis' if it has one. */
-static uint16_t n_grids(const hstpf_config_t *c)
+/* The rows stepped on the grid: cfg.grid_rows of them where the process
+ * noise is Gaussian (the rows' Kalman filters are then a fair stand-in
+ * for the others), every row otherwise (docs/grid.md, "Rows on the
+ * grid"). */
+static uint16_t grid_rows(const hstpf_config_t *c)
 {
-    return (uint16_t)(c->n_models + (hstpf__refine_grid_cfg(c) ? 1u : 0u));
+    return c->grid_rows > 0u && c->grid_rows < c->n_models && hstpf__process_gaussian(c) ? c->grid_rows
+                                                                                          : c->n_models;
 }
 
-/* A model placed from fixes: its cells, and with the continuous
- * hypothesis its row's Kalman filter too (the yardstick it is scored with,
- * and where lock.c places the hypothesis' EKF; refine.c). */
+/* The grid models: those rows, and the continuous hypothesis' if it has one. */
+static uint16_t n_grids(const hstpf_config_t *c)
+{
+    return (uint16_t)(grid_rows(c) + (hstpf__refine_grid_cfg(c) ? 1u : 0u));
+}
+
+/* Some rows have no grid. */
+static int screened(const hstpf_t *f)
+{
+    return grid_rows(&f->cfg) < f->cfg.n_models;
+}
+
+/* The models that have or may have a grid: the rows, and the hypothesis'. */
+static uint16_t n_cells_models(const hstpf_t *f)
+{
+    return (uint16_t)(f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1u : 0u));
+}
+
+/* The gridded row with the largest (smallest when lo) weight, the first of
+ * equals; -1: none. */
+static int gridded_extreme(const hstpf_t *f, int lo)
+{
+    int best = -1;
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        if (f->grid.slot[l] >= 0 &&
+            (best < 0 || (lo ? f->m[l].logq < f->m[best].logq : f->m[l].logq > f->m[best].logq))) {
+            best = (int)l;
+        }
+    }
+    return best;
+}
+
+/* The grids go to the rows with the largest weights: a row without one
+ * whose weight passes the lowest gridded row's takes that row's grid.
+ * With copy, it starts from the density of the gridded row that leads,
+ * which tracks the same train (its own Kalman filter is a Gaussian, and
+ * the fixes' tails are not). */
+static void choose_rows(hstpf_t *f, int copy)
+{
+    const int src = gridded_extreme(f, 0);
+    int saved = 0;
+    for (;;) {
+        const int w = gridded_extreme(f, 1);
+        int d = -1;
+        uint16_t l;
+        for (l = 0; l < f->cfg.n_models; ++l) {
+            if (f->grid.slot[l] < 0 && (d < 0 || f->m[l].logq > f->m[d].logq)) {
+                d = (int)l;
+            }
+        }
+        if (d < 0 || w < 0 || !(f->m[d].logq > f->m[w].logq)) {
+            return;
+        }
+        if (copy && !saved) { /* src's own grid may be the next one handed on */
+            const uint16_t k = (uint16_t)f->grid.slot[src];
+            memcpy(f->grid.save, f->grid.p[k], sizeof f->grid.p[k]);
+            memcpy(f->grid.save + NS * NV, f->grid.rest[k], sizeof f->grid.rest[k]);
+            memcpy(f->grid.save + NS * NV + NS, f->grid.geom[k], sizeof f->grid.geom[k]);
+            saved = 1;
+        }
+        f->grid.slot[d] = f->grid.slot[w];
+        f->grid.slot[w] = -1;
+        if (copy) {
+            const uint16_t k = (uint16_t)f->grid.slot[d];
+            memcpy(f->grid.p[k], f->grid.save, sizeof f->grid.p[k]);
+            memcpy(f->grid.rest[k], f->grid.save + NS * NV, sizeof f->grid.rest[k]);
+            memcpy(f->grid.geom[k], f->grid.save + NS * NV + NS, sizeof f->grid.geom[k]);
+            f->grid.pred_mass[k] = 1;
+        }
+    }
+}
+
+/* A model placed from fixes: its cells if it has a grid, and its row's
+ * Kalman filter where the rows run one (the continuous hypothesis'
+ * yardstick, where lock.c places the hypothesis' EKF, refine.c; the rows
+ * without a grid). */
 static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
-    hstpf__grid_place_one(f, m, q);
-    if (f->rf.active) {
+    const int gridded = f->grid.slot[m - f->m] >= 0;
+    if (gridded) {
+        hstpf__grid_place_one(f, m, q);
+    }
+    if (f->rf.active || screened(f)) {
         hstpf__kalman_place(f, m, q);
+    }
+    if (!gridded) {
+        hstpf__kalman_publish(f, m);
     }
 }
 
@@ -141,7 +225,8 @@ static void place_all(hstpf_t *f, const hstpf__acq_t *q)
     if (hstpf__refine_on_grid(f)) {
         hstpf__refine_grid_theta(f);
     }
-    for (l = 0; l < n_grids(&f->cfg); ++l) {
+    choose_rows(f, 0); /* each grid is placed below */
+    for (l = 0; l < n_cells_models(f); ++l) {
         place_one(f, &f->m[l], q);
     }
 }
@@ -150,7 +235,7 @@ static void place_all(hstpf_t *f, const hstpf__acq_t *q)
  * whether it holds any mass. */
 static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, real acc)
 {
-    const uint16_t l = (uint16_t)(m - f->m);
+    const uint16_t l = hstpf__grid_slot(f, m);
     const real dt = (real)st->dt, scale = (real)st->scale;
     real ng[4], tot, rtot, held;
     real *g = f->grid.geom[l];
@@ -189,7 +274,7 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
  * measurement with the model's speed, and scores the floor. */
 static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
 {
-    const uint16_t l = (uint16_t)(m - f->m);
+    const uint16_t l = hstpf__grid_slot(f, m);
     const uint16_t run = m->floor_run;
     const uint32_t hits = m->floor_hits;
     const real v_was = m->v_mean;
@@ -229,17 +314,82 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     hstpf__grid_moments(f, m, l);
 }
 
-/* When every row misses the measurement, it is the measurement (or the
- * reference) that is off, not the models: no model's weight moves. The
+/* The rows' Kalman filters on the noises' moments, each increment kept in
+ * m->kll: the continuous hypothesis' yardstick (refine.c), and the rows
+ * without a grid, whose rest and floor counters are their filter's. */
+static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        uint8_t held;
+        int floored;
+        m->kll = hstpf__kalman_step(f, m, st, &held, &floored);
+        if (f->grid.slot[l] < 0) {
+            m->held = held;
+            m->loglik = 0;
+            if (st->has_y) {
+                m->floor_hits += (uint32_t)floored;
+                m->floor_run = floored ? (uint16_t)(m->floor_run + 1u) : 0u;
+            }
+        }
+    }
+}
+
+/* A row without a grid scores against the leading row: the leader's exact
+ * increment plus the log ratio of their Kalman filters, within +-1 nat (a
+ * fix in a heavy tail puts that Gaussian ratio far beyond the exact
+ * densities'). It publishes the leader's state, which the grid has exactly
+ * under the fixes' real noise; a filter of its own that lost the train is
+ * placed again at the leader's. */
+static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
+{
+    const hstpf_model_t *lead = &f->m[gridded_extreme(f, 0)];
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        if (f->grid.slot[l] >= 0) {
+            continue;
+        }
+        if (st->has_y) {
+            const double r = m->kll - lead->kll;
+            m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
+        }
+        if (m->floor_run > 0u) {
+            m->kx[0] = lead->kx[0];
+            m->kx[1] = lead->kx[1];
+            m->kp[0] = lead->kp[0];
+            m->kp[1] = lead->kp[1];
+            m->kp[2] = lead->kp[2];
+            m->floor_run = 0;
+        }
+        m->s_mean = lead->s_mean;
+        m->v_mean = lead->v_mean;
+        m->s_var = lead->s_var;
+        m->v_var = lead->v_var;
+        m->ess = lead->ess;
+    }
+}
+
+/* When every gridded row misses the measurement, it is the measurement (or
+ * the reference) that is off, not the models: no model's weight moves. The
  * hypothesis' grid steps at the EKF's theta of the step before, so that
  * its likelihood is a prediction (refine.c). */
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 {
     uint16_t l, missed = 0;
+    if (screened(f)) {
+        choose_rows(f, 1);
+    }
+    if (hstpf__refine_yardstick(f) || screened(f)) {
+        rows_kalman_step(f, st);
+    }
     for (l = 0; l < f->cfg.n_models; ++l) {
-        const uint32_t hits = f->m[l].floor_hits;
-        model_step(f, &f->m[l], st);
-        missed = (uint16_t)(missed + (f->m[l].floor_hits != hits));
+        if (f->grid.slot[l] >= 0) {
+            const uint32_t hits = f->m[l].floor_hits;
+            model_step(f, &f->m[l], st);
+            missed = (uint16_t)(missed + (f->m[l].floor_hits != hits));
+        }
     }
     if (hstpf__refine_on_grid(f)) {
         const uint32_t hits = f->m[l].floor_hits;
@@ -251,8 +401,11 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
             missed = 0; /* it fits a fix every row misses: the rows are off */
         }
     }
-    if (st->has_y && missed == f->cfg.n_models) {
-        for (l = 0; l < n_grids(&f->cfg); ++l) {
+    if (screened(f)) {
+        rows_without_grid(f, st);
+    }
+    if (st->has_y && missed == grid_rows(&f->cfg)) {
+        for (l = 0; l < n_cells_models(f); ++l) {
             f->m[l].loglik = 0;
         }
     }
@@ -261,10 +414,12 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 static void shift(hstpf_t *f, real d)
 {
     uint16_t l;
+    for (l = 0; l < n_cells_models(f); ++l) {
+        f->m[l].s_mean -= d;
+        f->m[l].kx[0] -= (double)d; /* the Kalman filter's, if it runs */
+    }
     for (l = 0; l < n_grids(&f->cfg); ++l) {
         f->grid.geom[l][0] -= d;
-        f->m[l].s_mean -= d;
-        f->m[l].kx[0] -= (double)d; /* the yardstick's, if it runs */
     }
 }
 
@@ -273,12 +428,17 @@ static size_t ws_bytes(const hstpf_config_t *c)
     return HSTPF_GRID_WS_BYTES(n_grids(c));
 }
 
-/* The layout HSTPF_GRID_WS_BYTES counts: each model's cells, the
+/* The layout HSTPF_GRID_WS_BYTES counts: each grid's cells, the
  * transported grid, the saved cells, each model's mass at rest. */
 static void attach(hstpf_t *f, void *ws)
 {
     const size_t nm = n_grids(&f->cfg);
     real *r = (real *)ws;
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) { /* the first rows; choose_rows hands them on */
+        f->grid.slot[l] = (int16_t)(l < grid_rows(&f->cfg) ? l : -1);
+    }
+    f->grid.slot[f->cfg.n_models] = (int16_t)grid_rows(&f->cfg); /* the hypothesis', if it has one */
     f->grid.p = (real(*)[NS * NV])(void *)r;
     r += nm * NS * NV;
     f->grid.work = r;

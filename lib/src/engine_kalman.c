@@ -10,7 +10,7 @@
 
 typedef hstpf_real_t real;
 
-static void publish(const hstpf_t *f, hstpf_model_t *m)
+void hstpf__kalman_publish(const hstpf_t *f, hstpf_model_t *m)
 {
     m->s_mean = (real)m->kx[0];
     m->v_mean = (real)m->kx[1];
@@ -61,7 +61,7 @@ static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
     hstpf__kalman_place(f, m, q);
     m->held = 0;
-    publish(f, m);
+    hstpf__kalman_publish(f, m);
 }
 
 static void place_all(hstpf_t *f, const hstpf__acq_t *a)
@@ -161,7 +161,7 @@ static void update_model(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
             m->floor_run = 0;
         }
     }
-    publish(f, m);
+    hstpf__kalman_publish(f, m);
 }
 
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)

@@ -25,6 +25,13 @@ typedef hstpf_real_t real;
 #define MASS_MIN ((real)1e-30)  /* a cell below this is empty */
 #define LATTICE_COARSEST ((real)1.5) /* cfg.grid_speed_lattice: widest cells, x the box's own */
 
+/* Model m's grid (p, rest, geom, pred_mass): its slot. With cfg.grid_rows
+ * only the rows that carry the most weight have one (engine_grid.c). */
+static inline uint16_t hstpf__grid_slot(const hstpf_t *f, const hstpf_model_t *m)
+{
+    return (uint16_t)f->grid.slot[m - f->m];
+}
+
 /* The deterministic speed after one step (below 0: the train comes to
  * rest within the step; the caller moves that mass to rest). */
 static inline real hstpf__grid_speed_map(const hstpf_model_t *m, real v, real dt, real acc)

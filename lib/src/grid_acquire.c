@@ -16,7 +16,7 @@
  * spread, as in the other engines). Speeds below 0 are at rest. */
 void hstpf__grid_place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
 {
-    const uint16_t l = (uint16_t)(m - f->m);
+    const uint16_t l = hstpf__grid_slot(f, m);
     const hstpf_config_t *c = &f->cfg;
     real *p = f->grid.p[l], *g = f->grid.geom[l], *rest = f->grid.rest[l];
     const real y2 = (real)q->y2, y1 = (real)q->y1, t = (real)q->t12;

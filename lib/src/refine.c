@@ -208,8 +208,8 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
 /* The hypothesis' likelihood is Gaussian: on the grid engine the rows'
  * are exact, and comparing the two would score the noise model, not the
  * train. So each row also runs as the Kalman engine's filter on the
- * noise's moments (m->kx, m->kp, which the grid engine does not use; it
- * places and shifts them with its cells), and
+ * noise's moments (m->kx, m->kp; the grid engine steps, places and shifts
+ * them with its cells), and
  * the hypothesis is scored against the leading row l in that one currency:
  * its increment is l's exact increment plus log(p_gauss(hypothesis) /
  * p_gauss(l)). With the truth on row l the ratio is the Gaussian's Occam
@@ -217,16 +217,8 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
 {
     const uint16_t lead = hstpf__leading_row(f);
-    double ll_lead = 0.0;
-    uint16_t l;
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        uint8_t held;
-        int floored;
-        const double ll = hstpf__kalman_step(f, &f->m[l], st, &held, &floored);
-        ll_lead = l == lead ? ll : ll_lead;
-    }
-    if (st->has_y) {
-        f->rf.loglik += (double)f->m[lead].loglik - ll_lead;
+    if (st->has_y) { /* the grid engine stepped the rows' filters: m->kll */
+        f->rf.loglik += (double)f->m[lead].loglik - f->m[lead].kll;
     }
 }
 

@@ -59,9 +59,10 @@ void hstpf__refine_from_grid(hstpf_t *f, const hstpf__step_t *st);
  * model's when it has one (hstpf__refine_on_grid), else the EKF's. */
 void hstpf__refine_sv(const hstpf_t *f, double *s, double *v, double *pss, double *pvv);
 
-/* The yardstick's step, after the engine's and hstpf__refine_update: the
- * hypothesis' increment becomes the leading row's own plus the log ratio
- * of the hypothesis to that row in the yardstick. */
+/* After the engine's step (which stepped the rows' yardstick filters) and
+ * hstpf__refine_update: the hypothesis' increment becomes the leading
+ * row's own plus the log ratio of the hypothesis to that row in the
+ * yardstick. */
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st);
 
 /* The posterior mean of (c0, c1, c2), each >= 0, and its covariance. */

@@ -1288,6 +1288,7 @@ static void usage(void)
             "              Not a filter setting)\n"
             "  [--oracle-gauss]  (the same on the Kalman engine with each noise a Gaussian of its mean and sd)\n"
             "  [--speed-lattice | --no-speed-lattice]  (grid: the speed cells carried by each model's map, or remapped)\n"
+            "  [--grid-rows K]  (grid, Gaussian process noise: the K rows with the largest weights on the grid, 0 = every row)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
         fprintf(stderr, " %s", scenarios[i].name);
@@ -1361,6 +1362,8 @@ int main(int argc, char **argv)
             seeds = atoi(v);
         } else if (!strcmp(a, "--refine-prior")) {
             st.base.refine_prior_q = atof(v);
+        } else if (!strcmp(a, "--grid-rows")) {
+            st.base.grid_rows = (uint16_t)atoi(v);
         } else if (!strcmp(a, "--refine-spread")) {
             st.base.refine_spread = atof(v);
         } else if (!strcmp(a, "--threads")) {

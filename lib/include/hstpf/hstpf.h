@@ -294,6 +294,21 @@ typedef struct {
      *  step (the default before the thirteenth session). Other engines
      *  ignore it. */
     uint8_t grid_speed_lattice;
+    /** Grid engine under Gaussian process noise (the heavy-tailed fixes
+     *  of a GNSS receiver): how many rows are stepped on the grid, those
+     *  with the largest weights, [0, HSTPF_MAX_MODELS] (3; 0: every row).
+     *  The others run the Kalman filter on the noises' moments: their
+     *  increment is the leading row's exact one plus the log ratio of
+     *  their filter to the leader's (at most 1 nat either way), and they
+     *  publish the leader's state. A row whose weight passes a gridded
+     *  row's takes that row's grid, started from the leader's density.
+     *  The workspace then holds min(grid_rows, n_models) row grids, and a
+     *  17-row step costs that many grid model-steps plus a 2 x 2 filter
+     *  per row. Under non-Gaussian process noise (Case 2's Gamma) every
+     *  row is gridded whatever this says: the Kalman ratio is not a fair
+     *  stand-in there (docs/grid.md, "Rows on the grid"). Other engines
+     *  ignore it. */
+    uint16_t grid_rows;
     /** Caller-owned memory for the engine in use: the particles or the
      *  grid cells, which hstpf_t does not hold. At least
      *  hstpf_workspace_size() bytes (HSTPF_PARTICLE_WS_BYTES,
@@ -469,6 +484,7 @@ typedef struct {
     hstpf_real_t ks[HSTPF__GRID_K], kv[HSTPF__GRID_K];   /* process-noise kernels */
     int16_t first[HSTPF_GRID_NV], last[HSTPF_GRID_NV];   /* occupied cells of each row */
     int16_t box[4];                                      /* occupied rows and columns of work */
+    int16_t slot[HSTPF_MAX_MODELS + 1];                  /* model l's grid (p, rest, geom), -1: none */
 } hstpf_grid_ws_t;
 
 /* Private per-model state. */
@@ -487,6 +503,7 @@ typedef struct {
     uint16_t track_hint;
     double kx[2];                         /* Kalman engine: mean (s rel., v) */
     double kp[3];                         /* and covariance (ss, sv, vv) */
+    double kll;                           /* grid engine: that filter's last increment */
 } hstpf_model_t;
 
 /* Private: the continuous-theta hypothesis. */
