@@ -487,6 +487,15 @@ else()
     message("grid engine, Case 2 (${_qg_shape}): ${_qg2_instr} instructions for ${_qg2_ms} grid model-steps = "
             "${_qg2_ims} per grid model-step, ${_qg2_step17} for a 17-row step (18 grid models)")
   endif()
+  # all 17 rows with the defaults (grid_rows on the grid, Case 1 inputs):
+  # instructions per bank step, issue 13's 3 M bar
+  if(_qall MATCHES "timed 17-row grid pass: ([0-9]+) bank steps in ([0-9]+) SysTick counts \\(([0-9]+) rows")
+    math(EXPR _qg17_instr "${CMAKE_MATCH_2} * 40")
+    math(EXPR _qg17_step "(${_qg17_instr} + ${CMAKE_MATCH_1} / 2) / ${CMAKE_MATCH_1}")
+    set(_qg17_rows ${CMAKE_MATCH_3})
+    message("grid engine, 17 rows (${_qg_shape}, ${_qg17_rows} on the grid): ${_qg17_instr} instructions for "
+            "${CMAKE_MATCH_1} bank steps = ${_qg17_step} per 17-row step")
+  endif()
   set(_qemu_summary "passed")
   if(HSTPF_HOST_DEMO AND EXISTS "${HSTPF_HOST_DEMO}")
     execute_process(COMMAND "${HSTPF_HOST_DEMO}" OUTPUT_VARIABLE _hout RESULT_VARIABLE _hrc)
@@ -540,6 +549,7 @@ budget_check("instructions per particle-step" "${_q_ips}" ${HSTPF_BUDGET_INSTR_P
 budget_check("instructions per Kalman model-step" "${_qk_ims}" ${HSTPF_BUDGET_INSTR_KALMAN_MODEL})
 budget_check("instructions per grid model-step" "${_qg_ims}" ${HSTPF_BUDGET_INSTR_GRID_MODEL})
 budget_check("instructions per grid model-step, Case 2" "${_qg2_ims}" ${HSTPF_BUDGET_INSTR_GRID_MODEL_CASE2})
+budget_check("instructions per 17-row grid step" "${_qg17_step}" ${HSTPF_BUDGET_INSTR_GRID_17ROW_STEP})
 if(NOT _over STREQUAL "")
   message(FATAL_ERROR "over budget (cmake/footprint-budgets.cmake):${_over}\n"
                       "raise a budget only as a decision, in the same commit, saying why")
@@ -581,6 +591,7 @@ if(DEFINED _qg_ims)
 endif()
 if(DEFINED _qg2_ims)
   string(APPEND _t "| instructions per grid model-step, Case 2 inputs, 3 rows and the hypothesis' grid (QEMU -icount) | ${_qg2_ims} |\n")
+  string(APPEND _t "| instructions per 17-row grid bank step, Case 1 inputs, ${_qg17_rows} rows on the grid (QEMU -icount) | ${_qg17_step} |\n")
 endif()
 file(WRITE "${_md}" "Compiler: ${_gccver}; flags: ${_flags} -std=c99\n\n${_t}\nOn-target run: ${_qemu_summary}\n")
 message("summary written to ${_md}")

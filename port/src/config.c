@@ -82,6 +82,7 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->e_blur_sd = fc.e_blur_sd;
     c->grid_speed_lattice = fc.grid_speed_lattice;
     c->refine = fc.refine;
+    c->grid_rows = fc.grid_rows;
     c->declare_threshold = fc.declare_threshold;
     c->declare_hold_s = fc.declare_hold_s;
     c->gate_m = fc.gate_m;
@@ -134,6 +135,7 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->e_blur_sd = c->e_blur_sd;
     fc->grid_speed_lattice = c->grid_speed_lattice;
     fc->refine = (uint8_t)c->refine;
+    fc->grid_rows = c->grid_rows;
     fc->declare_threshold = c->declare_threshold;
     fc->declare_hold_s = c->declare_hold_s;
     fc->gate_m = c->gate_m;

@@ -45,6 +45,7 @@ typedef struct {
     double roughening_k, e_blur_sd;
     uint8_t grid_speed_lattice;
     uint16_t refine; /* hstpf_config_t.refine */
+    uint16_t grid_rows; /* hstpf_config_t.grid_rows */
     double declare_threshold, declare_hold_s;
     double gate_m;
     /* train and inputs */

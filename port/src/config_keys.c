@@ -30,6 +30,8 @@ const hstpfd__key_t hstpfd__keys[] = {
      "particle engine: measurement density blurred by N(0, sd), m (0 = exact; for one-sided noise)"},
     {"grid_speed_lattice", K_BOOL, OFF(grid_speed_lattice), 0, 0, 0,
      "grid engine: 1 = each model's speed cells carried by its own dynamics, 0 = remapped every step"},
+    {"grid_rows", K_U16, OFF(grid_rows), 0, HSTPF_MAX_MODELS, 0,
+     "grid engine, Gaussian process noise: rows stepped on the grid, those with the largest weights (0 = every row)"},
     {"refine", K_U16, OFF(refine), 0, 2, 0,
      "continuous-theta hypothesis: 0 = rows only, 1 = on (grid: a Kalman yardstick, or its own grid under non-Gaussian process noise), 2 = on its own grid under any noise"},
     {"declare_threshold", K_DBL, OFF(declare_threshold), 0, 1, 1,

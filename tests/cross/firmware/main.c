@@ -241,6 +241,27 @@ int main(void)
             p = put_u(p, ticks);
             emit(line, put_s(p, " SysTick counts"));
         }
+        /* all 17 rows on the grid engine with the library's defaults: under
+         * this Gaussian process noise the grid_rows rows with the largest
+         * weights are on the grid, the others on their Kalman filters */
+        {
+            static hstpf_theta_t all[HSTPF_N_TRAIN_TYPES];
+            hstpf_config_t c17 = cfg;
+            memcpy(all, hstpf_train_types, sizeof all);
+            c17.models = all;
+            c17.n_models = HSTPF_N_TRAIN_TYPES;
+            c17.engine = HSTPF_ENGINE_GRID;
+            if (timed_pass(&c17, &ok2, &ticks) != 0) {
+                return 1;
+            }
+            p = put_s(line, "m4f: timed 17-row grid pass: ");
+            p = put_u(p, ok2);
+            p = put_s(p, " bank steps in ");
+            p = put_u(p, ticks);
+            p = put_s(p, " SysTick counts (");
+            p = put_u(p, c17.grid_rows);
+            emit(line, put_s(p, " rows on the grid)"));
+        }
         p = put_s(line, "m4f: grid cells ");
         p = put_u(p, HSTPF_GRID_NS);
         p = put_s(p, " x ");
