@@ -146,40 +146,40 @@ static uint16_t n_cells_models(const hstpf_t *f)
     return (uint16_t)(f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1u : 0u));
 }
 
-/* The gridded row with the largest (smallest when lo) weight, the first of
- * equals; -1: none. */
-static int gridded_extreme(const hstpf_t *f, int lo)
+/* Row a ranks above row b: a larger weight, or the same and a lower index
+ * (a strict order, so the rows on the grid follow from the weights alone:
+ * a reset run repeats the first). */
+static int ranks_above(const hstpf_t *f, int a, int b)
+{
+    return f->m[a].logq > f->m[b].logq || (f->m[a].logq == f->m[b].logq && a < b);
+}
+
+/* The highest (lowest when lo) ranked row with a grid (want 1) or without
+ * one (want 0); -1: none. */
+static int ranked(const hstpf_t *f, int want, int lo)
 {
     int best = -1;
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
-        if (f->grid.slot[l] >= 0 &&
-            (best < 0 || (lo ? f->m[l].logq < f->m[best].logq : f->m[l].logq > f->m[best].logq))) {
+        if ((f->grid.slot[l] >= 0) == want && (best < 0 || ranks_above(f, lo ? best : (int)l, lo ? (int)l : best))) {
             best = (int)l;
         }
     }
     return best;
 }
 
-/* The grids go to the rows with the largest weights: a row without one
- * whose weight passes the lowest gridded row's takes that row's grid.
- * With copy, it starts from the density of the gridded row that leads,
- * which tracks the same train (its own Kalman filter is a Gaussian, and
- * the fixes' tails are not). */
+/* The grids go to the highest ranked rows: a row without one that ranks
+ * above the lowest gridded row takes that row's grid. With copy, it starts
+ * from the density of the gridded row that leads, which tracks the same
+ * train (its own Kalman filter is a Gaussian, and the fixes' tails are
+ * not). */
 static void choose_rows(hstpf_t *f, int copy)
 {
-    const int src = gridded_extreme(f, 0);
+    const int src = ranked(f, 1, 0);
     int saved = 0;
     for (;;) {
-        const int w = gridded_extreme(f, 1);
-        int d = -1;
-        uint16_t l;
-        for (l = 0; l < f->cfg.n_models; ++l) {
-            if (f->grid.slot[l] < 0 && (d < 0 || f->m[l].logq > f->m[d].logq)) {
-                d = (int)l;
-            }
-        }
-        if (d < 0 || w < 0 || !(f->m[d].logq > f->m[w].logq)) {
+        const int w = ranked(f, 1, 1), d = ranked(f, 0, 0);
+        if (d < 0 || w < 0 || !ranks_above(f, d, w)) {
             return;
         }
         if (copy && !saved) { /* src's own grid may be the next one handed on */
@@ -344,7 +344,7 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
  * placed again at the leader's. */
 static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
 {
-    const hstpf_model_t *lead = &f->m[gridded_extreme(f, 0)];
+    const hstpf_model_t *lead = &f->m[ranked(f, 1, 0)];
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];

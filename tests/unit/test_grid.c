@@ -31,6 +31,8 @@
  *   0, position still, weights frozen, the estimate's standstill flag).
  * - Acquisition at 300 km/h from two fixes with the diffuse speed prior:
  *   every model's speed within 1 m/s and position within 3 m after 30 s.
+ * - cfg.grid_rows: which rows have a grid, how the others score, and the
+ *   same answer as every row on the grid (test_grid_rows).
  * - Mass: after every step the cells sum to 1 within 1e-5, none is
  *   negative or non-finite, and a prediction without a measurement keeps
  *   all but 1e-3 of the mass (measured: 2e-4; the box leaves 1e-5 out per side and
@@ -712,6 +714,131 @@ static void test_acquire_300(void **state)
     }
 }
 
+/* cfg.grid_rows under Gaussian process noise (Case 1 inputs, all 17 rows,
+ * the truth ND2, which Case 1 identifies among 17): after each step the
+ * rows with a grid are exactly the grid_rows highest ranked by the weights
+ * before it (larger weight, then lower index); a row without one scores
+ * the leading gridded row's increment plus its Kalman filter's log ratio to
+ * the leader's, within +-1 nat, and publishes the leader's state; the
+ * workspace holds grid_rows grids. Against every row on the grid (0) on
+ * the same inputs: the same type declared, positions within 1 m RMS of
+ * each other (each tracks the train within about 1.4 m, the fix noise's
+ * 2 m scaled by the filter). Under Case 2's Gamma process noise the
+ * option is ignored: every row has a grid. */
+static void rows_run(hstpf_t *f, const hstpf_config_t *c, hstpf_estimate_t *last, double *pos, int check)
+{
+    hstpf_sim_config_t sc;
+    hstpf_sim_t sim;
+    hstpf_sim_sample_t smp;
+    hstpf_input_t in;
+    int k;
+    hstpf_sim_default(&sc);
+    sc.seed = 3;
+    sc.truth = hstpf_train_types[hstpf_train_type_find("ND2")];
+    hstpf_sim_init(&sim, &sc);
+    for (k = 0; k <= 1800; ++k) {
+        double lq[HSTPF_N_TRAIN_TYPES];
+        uint16_t l, n_grid = 0;
+        for (l = 0; l < c->n_models; ++l) {
+            lq[l] = f->m[l].logq;
+        }
+        hstpf_sim_next_input(&sim, &smp, &in);
+        assert_int_equal(hstpf_step(f, &in), HSTPF_OK);
+        (void)hstpf_estimate(f, last);
+        pos[k] = last->position_m;
+        if (!check || !f->have_fix) {
+            continue;
+        }
+        for (l = 0; l < c->n_models; ++l) {
+            uint16_t above = 0, j;
+            for (j = 0; j < c->n_models; ++j) {
+                above = (uint16_t)(above + (lq[j] > lq[l] || (lq[j] == lq[l] && j < l)));
+            }
+            if ((f->grid.slot[l] >= 0) != (above < c->grid_rows)) {
+                fail_msg("t %d: row %u ranked %u has slot %d", k, l, above, f->grid.slot[l]);
+            }
+            n_grid = (uint16_t)(n_grid + (f->grid.slot[l] >= 0));
+        }
+        assert_int_equal(n_grid, c->grid_rows);
+        if (in.has_position && k > 2) {
+            int lead = -1;
+            for (l = 0; l < c->n_models; ++l) {
+                if (f->grid.slot[l] >= 0 && (lead < 0 || lq[l] > lq[lead])) {
+                    lead = (int)l;
+                }
+            }
+            for (l = 0; l < c->n_models; ++l) {
+                if (f->grid.slot[l] < 0) {
+                    const double r = f->m[l].kll - f->m[lead].kll;
+                    const double want = (double)f->m[lead].loglik + (r > 1.0 ? 1.0 : (r < -1.0 ? -1.0 : r));
+                    TU_CLOSE((double)f->m[l].loglik, want, 1e-4);
+                    assert_true(f->m[l].s_mean == f->m[lead].s_mean && f->m[l].v_mean == f->m[lead].v_mean);
+                }
+            }
+        }
+    }
+}
+
+static void test_grid_rows(void **state)
+{
+    static double pa[1801], pb[1801];
+    hstpf_sim_config_t sc;
+    hstpf_config_t c, c0;
+    hstpf_estimate_t ea, eb;
+    size_t ws;
+    double ss = 0.0;
+    int k;
+    uint16_t l;
+    (void)state;
+    hstpf_sim_default(&sc);
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    assert_int_equal(c.grid_rows, 3);
+    c.models = hstpf_train_types;
+    c.n_models = HSTPF_N_TRAIN_TYPES;
+    c.noise_s = sc.noise_s;
+    c.noise_v = sc.noise_v;
+    c.noise_e = sc.noise_e;
+    c.engine = HSTPF_ENGINE_GRID;
+    assert_int_equal(hstpf_workspace_size(&c, &ws), HSTPF_OK);
+    assert_int_equal(ws, HSTPF_GRID_WS_BYTES(3));
+    c0 = c;
+    c0.grid_rows = 0;
+    assert_int_equal(hstpf_workspace_size(&c0, &ws), HSTPF_OK);
+    assert_int_equal(ws, HSTPF_GRID_WS_BYTES(HSTPF_N_TRAIN_TYPES));
+    tu_workspace(&c, 0);
+    tu_workspace(&c0, 1);
+    assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
+    assert_int_equal(hstpf_init(&fb, sizeof fb, &c0), HSTPF_OK);
+    rows_run(&fa, &c, &ea, pa, 1);
+    rows_run(&fb, &c0, &eb, pb, 0);
+    for (k = 0; k <= 1800; ++k) {
+        ss += (pa[k] - pb[k]) * (pa[k] - pb[k]);
+    }
+    print_message("grid_rows 3 vs every row: declared %d / %d, position RMS difference %.3f m\n", ea.declared,
+                  eb.declared, sqrt(ss / 1801.0));
+    assert_int_equal(ea.declared, hstpf_train_type_find("ND2"));
+    assert_int_equal(eb.declared, ea.declared);
+    assert_true(sqrt(ss / 1801.0) < 1.0);
+    /* which rows have a grid follows from the weights alone: a reset run repeats the first, bit for bit */
+    assert_int_equal(hstpf_reset(&fa), HSTPF_OK);
+    rows_run(&fa, &c, &eb, pb, 0);
+    assert_memory_equal(pa, pb, sizeof pa);
+    /* Case 2: every row (and the hypothesis) on the grid whatever grid_rows says */
+    hstpf_sim_case2(&sc);
+    c.noise_s = sc.noise_s;
+    c.noise_v = sc.noise_v;
+    c.noise_e = sc.noise_e;
+    assert_int_equal(hstpf_workspace_size(&c, &ws), HSTPF_OK);
+    assert_int_equal(ws, HSTPF_GRID_WS_BYTES(HSTPF_N_TRAIN_TYPES + 1));
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
+    for (l = 0; l < c.n_models; ++l) {
+        assert_true(fa.grid.slot[l] == (int16_t)l);
+    }
+    c.grid_rows = HSTPF_MAX_MODELS + 1;
+    assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_E_CONFIG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -726,6 +853,7 @@ int main(void)
         cmocka_unit_test(test_standstill),
         cmocka_unit_test(test_standstill_gamma),
         cmocka_unit_test(test_acquire_300),
+        cmocka_unit_test(test_grid_rows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
