@@ -84,6 +84,9 @@ done
 for s in heavy-t heavy-mix; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$gseeds" --engine grid --json "$out/$s-grid.json" | tee "$out/$s-grid.txt"
+  # every row on the grid (the default until the eighteenth session: grid_rows, docs/grid.md)
+  "$mc" --scenario "$s" --seeds "$gseeds" --engine grid --grid-rows 0 --json "$out/$s-grid-allrows.json" \
+    | tee "$out/$s-grid-allrows.txt"
   "$mc" --scenario "$s" --seeds "$gseeds" --rough 0.7 --engine particle --particles 256 \
     --json "$out/$s-particle256.json" | tee "$out/$s-particle256.txt"
   # reference: the filter told only a Gaussian of the noise's sd (the Kalman engine)

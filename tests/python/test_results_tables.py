@@ -42,6 +42,16 @@ def test_issue13_row(tmp_path):
     assert cells[7:] == ["1 (16.7%)", "4.25%", "0.216", "0.0100"]
 
 
+def test_issue13_every_row_on_the_grid(tmp_path):
+    # the grid with every row on it (--grid-rows 0) is its own row, after the defaults'
+    write(tmp_path, "heavy-t", "grid")
+    write(tmp_path, "heavy-t", "grid-allrows")
+    table = rt.issue13(tmp_path, "heavy-t").splitlines()
+    assert len(table) == 4
+    assert table[2].startswith("| grid 20 x 72 (library defaults)")
+    assert "every row on the grid" in table[3] and "`--grid-rows 0`" in table[3]
+
+
 def test_issue13_only_prints_present_scenarios(tmp_path, capsys):
     write(tmp_path, "all17-case2", "particle256")
     assert rt.main(["--dir", str(tmp_path), "--issue13-only"]) == 0

@@ -231,6 +231,7 @@ ISSUE13 = {
     "heavy-mix": "all 17 types, 95/5 % multipath mixture position noise, paper profile",
 }
 ENGINES = [("grid", "grid 20 x 72 (library defaults)"),
+           ("grid-allrows", "grid 20 x 72, every row on the grid (`--grid-rows 0`)"),
            ("particle", "particles, M = 100 (the library's), blur 0.2 m, roughening 0.7"),
            ("particle256", "particles, M = 256, blur 0.2 m, roughening 0.7"),
            ("gauss", "reference: Kalman, told only N(0, sd^2) of the noise (`--gauss-e`)")]

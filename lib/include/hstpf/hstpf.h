@@ -440,10 +440,11 @@ typedef struct {
  * Particles: s, v and log weight per particle and model, and three
  * per-particle arrays for one model's step (plus 16-bit counts). Grid:
  * the cells of every model, the transported grid and a model's saved
- * cells for a retried step, and each model's mass at rest. Where the
- * continuous hypothesis runs on a grid (cfg.refine 1 under non-Gaussian
- * process noise, or 2) it is one more grid model:
- * HSTPF_GRID_WS_BYTES(n_models + 1).
+ * cells for a retried step, and each model's mass at rest. Under
+ * Gaussian process noise only cfg.grid_rows rows have a grid:
+ * HSTPF_GRID_WS_BYTES(min(grid_rows, n_models)). Where the continuous
+ * hypothesis runs on a grid (cfg.refine 1 under non-Gaussian process
+ * noise, or 2) it is one more grid model: HSTPF_GRID_WS_BYTES(n_models + 1).
  */
 #define HSTPF_WORKSPACE_ALIGN 8u /**< alignment of the workspace, bytes */
 #define HSTPF__WS_ROUND(b) ((((size_t)(b)) + 7u) & ~(size_t)7u)
