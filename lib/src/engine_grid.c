@@ -316,7 +316,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
 
 /* The rows' Kalman filters on the noises' moments, each increment kept in
  * m->kll: the continuous hypothesis' yardstick (refine.c), and the rows
- * without a grid, whose rest and floor counters are their filter's. */
+ * without a grid, whose rest is their filter's. */
 static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
 {
     uint16_t l;
@@ -328,10 +328,7 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
         if (f->grid.slot[l] < 0) {
             m->held = held;
             m->loglik = 0;
-            if (st->has_y) {
-                m->floor_hits += (uint32_t)floored;
-                m->floor_run = floored ? (uint16_t)(m->floor_run + 1u) : 0u;
-            }
+            m->floor_run = (uint16_t)(st->has_y && floored); /* until rows_without_grid */
         }
     }
 }
@@ -340,8 +337,9 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
  * increment plus the log ratio of their Kalman filters, within +-1 nat (a
  * fix in a heavy tail puts that Gaussian ratio far beyond the exact
  * densities'). It publishes the leader's state, which the grid has exactly
- * under the fixes' real noise; a filter of its own that lost the train is
- * placed again at the leader's. */
+ * under the fixes' real noise, and the leader's floor counts (so a fix
+ * every weighted model misses is still told, bank.c all_lost); a filter of
+ * its own that lost the train is placed again at the leader's. */
 static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
 {
     const hstpf_model_t *lead = &f->m[ranked(f, 1, 0)];
@@ -355,14 +353,15 @@ static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
             const double r = m->kll - lead->kll;
             m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
         }
-        if (m->floor_run > 0u) {
+        if (m->floor_run > 0u) { /* its own filter missed this fix */
             m->kx[0] = lead->kx[0];
             m->kx[1] = lead->kx[1];
             m->kp[0] = lead->kp[0];
             m->kp[1] = lead->kp[1];
             m->kp[2] = lead->kp[2];
-            m->floor_run = 0;
         }
+        m->floor_run = lead->floor_run;
+        m->floor_hits += (uint32_t)(st->has_y && lead->floor_run > 0u);
         m->s_mean = lead->s_mean;
         m->v_mean = lead->v_mean;
         m->s_var = lead->s_var;
