@@ -658,9 +658,11 @@ int32_t hstpf_reacquire(hstpf_t *f);
  * Cost: O(n_models x n_particles): per particle two RNG draws and table
  * samples, the model update, one log-density and one exp look-up; per model
  * one log(); bounded. The Kalman engine: O(n_models), about 60 flops and
- * one log() per model. The grid engine: O(n_models x HSTPF_GRID_NS x
- * HSTPF_GRID_NV x kernel taps), a few log() per model, bounded (docs/grid.md
- * measures it). Stack below 1 KiB (560 B measured on a Cortex-M4F
+ * one log() per model. The grid engine: O(grid models x HSTPF_GRID_NS x
+ * HSTPF_GRID_NV x kernel taps), a few log() per model, bounded, where the
+ * grid models are min(cfg.grid_rows, n_models) under Gaussian process
+ * noise (plus a Kalman step per row), every row otherwise, and the
+ * continuous hypothesis' grid if it has one (docs/grid.md measures it). Stack below 1 KiB (560 B measured on a Cortex-M4F
  * with libm, docs/footprint.md); no other memory.
  */
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
