@@ -245,7 +245,7 @@ static int finite_models(const hstpf_t *f)
         const hstpf_model_t *m = &f->m[l];
         z += fabs((double)m->s_mean) + fabs((double)m->v_mean) + fabs((double)m->s_var) +
              fabs((double)m->v_var) + fabs(m->logq);
-        if (hstpf__refine_yardstick(f)) { /* the rows' yardstick filters too */
+        if (f->engine == (uint8_t)HSTPF_ENGINE_GRID) { /* the rows' Kalman filters too (zero when unused) */
             z += fabs(m->kx[0]) + fabs(m->kx[1]) + fabs(m->kp[0]) + fabs(m->kp[2]);
         }
     }

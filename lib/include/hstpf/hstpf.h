@@ -265,8 +265,8 @@ typedef struct {
      *  On the grid engine it is scored through a Kalman yardstick of the
      *  rows under Gaussian process noise, and by one more grid model at
      *  its current theta under non-Gaussian process noise (Case 2's Gamma),
-     *  which needs one more grid in the workspace,
-     *  HSTPF_GRID_WS_BYTES(n_models + 1), and its step (docs/model.md,
+     *  which needs one more grid in the workspace (hstpf_workspace_size()
+     *  counts it), and its step (docs/model.md,
      *  "Engines"). 2: that grid model under any noise. 0: rows only (with
      *  the hypothesis a train off every row is seldom declared a wrong
      *  type; it costs some identification speed on the table,
@@ -444,7 +444,9 @@ typedef struct {
  * Gaussian process noise only cfg.grid_rows rows have a grid:
  * HSTPF_GRID_WS_BYTES(min(grid_rows, n_models)). Where the continuous
  * hypothesis runs on a grid (cfg.refine 1 under non-Gaussian process
- * noise, or 2) it is one more grid model: HSTPF_GRID_WS_BYTES(n_models + 1).
+ * noise, or 2) it is one more grid model: HSTPF_GRID_WS_BYTES(n_models + 1)
+ * under non-Gaussian process noise, HSTPF_GRID_WS_BYTES(min(grid_rows,
+ * n_models) + 1) with refine 2 under Gaussian process noise.
  */
 #define HSTPF_WORKSPACE_ALIGN 8u /**< alignment of the workspace, bytes */
 #define HSTPF__WS_ROUND(b) ((((size_t)(b)) + 7u) & ~(size_t)7u)
