@@ -146,6 +146,22 @@ static uint16_t n_cells_models(const hstpf_t *f)
     return (uint16_t)(f->cfg.n_models + (hstpf__refine_on_grid(f) ? 1u : 0u));
 }
 
+/* Grid k's cells, cells at rest and geometry into f->grid.save (a step to
+ * retry, a grid to hand on), and back into grid k. */
+static void save_cells(hstpf_t *f, uint16_t k)
+{
+    memcpy(f->grid.save, f->grid.p[k], sizeof f->grid.p[k]);
+    memcpy(f->grid.save + NS * NV, f->grid.rest[k], sizeof f->grid.rest[k]);
+    memcpy(f->grid.save + NS * NV + NS, f->grid.geom[k], sizeof f->grid.geom[k]);
+}
+
+static void restore_cells(hstpf_t *f, uint16_t k)
+{
+    memcpy(f->grid.p[k], f->grid.save, sizeof f->grid.p[k]);
+    memcpy(f->grid.rest[k], f->grid.save + NS * NV, sizeof f->grid.rest[k]);
+    memcpy(f->grid.geom[k], f->grid.save + NS * NV + NS, sizeof f->grid.geom[k]);
+}
+
 /* Row a ranks above row b: a larger weight, or the same and a lower index
  * (a strict order, so the rows on the grid follow from the weights alone:
  * a reset run repeats the first). */
@@ -184,18 +200,14 @@ static void choose_rows(hstpf_t *f, int copy)
         }
         if (copy && !saved) { /* src's own grid may be the next one handed on */
             const uint16_t k = (uint16_t)f->grid.slot[src];
-            memcpy(f->grid.save, f->grid.p[k], sizeof f->grid.p[k]);
-            memcpy(f->grid.save + NS * NV, f->grid.rest[k], sizeof f->grid.rest[k]);
-            memcpy(f->grid.save + NS * NV + NS, f->grid.geom[k], sizeof f->grid.geom[k]);
+            save_cells(f, k);
             saved = 1;
         }
         f->grid.slot[d] = f->grid.slot[w];
         f->grid.slot[w] = -1;
         if (copy) {
             const uint16_t k = (uint16_t)f->grid.slot[d];
-            memcpy(f->grid.p[k], f->grid.save, sizeof f->grid.p[k]);
-            memcpy(f->grid.rest[k], f->grid.save + NS * NV, sizeof f->grid.rest[k]);
-            memcpy(f->grid.geom[k], f->grid.save + NS * NV + NS, sizeof f->grid.geom[k]);
+            restore_cells(f, k);
             f->grid.pred_mass[k] = 1;
         }
     }
@@ -286,16 +298,12 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
         acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);
     }
     if (st->has_y) {
-        memcpy(f->grid.save, f->grid.p[l], sizeof f->grid.p[l]);
-        memcpy(f->grid.save + NS * NV, f->grid.rest[l], sizeof f->grid.rest[l]);
-        memcpy(f->grid.save + NS * NV + NS, f->grid.geom[l], sizeof f->grid.geom[l]);
+        save_cells(f, l);
     }
     f->grid.tail = GRID_TAIL;
     has_mass = model_pass(f, m, st, acc);
     if (st->has_y && ((run == 0u && m->floor_run > 0u) || !has_mass)) {
-        memcpy(f->grid.p[l], f->grid.save, sizeof f->grid.p[l]);
-        memcpy(f->grid.rest[l], f->grid.save + NS * NV, sizeof f->grid.rest[l]);
-        memcpy(f->grid.geom[l], f->grid.save + NS * NV + NS, sizeof f->grid.geom[l]);
+        restore_cells(f, l);
         m->floor_run = run;
         m->floor_hits = hits;
         f->grid.tail = WIDE_TAIL;
