@@ -72,6 +72,23 @@ void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
  * measurement was beyond the floor. */
 double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, uint8_t *held, int *floored);
 
+/* A fix scored by the fix noise's real density against a Gaussian
+ * prediction N(s, pss) of the position (kalman_fix.c). */
+typedef struct {
+    double loglik;    /* log p(y), with the grid's floor */
+    double ds;        /* posterior mean of the position minus s */
+    double var;       /* posterior variance of the position */
+    int floored;      /* every cell beyond the floor: ds = 0, var = pss */
+} hstpf__fix_t;
+void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf__fix_t *out);
+
+/* The rows' Kalman filters and the continuous hypothesis' EKF score a fix
+ * by its real density (hstpf__kalman_fix), not by its moments: on the grid
+ * engine, where they stand in for rows without a grid and are the
+ * hypothesis' yardstick, and only where the process noise is Gaussian (it
+ * is then only the fixes that are not). */
+int hstpf__fix_exact(const hstpf_t *f);
+
 /* A row's Kalman filter state published into s_mean, v_mean, s_var,
  * v_var, ess (the Kalman engine's rows). */
 void hstpf__kalman_publish(const hstpf_t *f, hstpf_model_t *m);

@@ -115,7 +115,19 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qsv = fvv * (psv + dt * pvv);
         qvv = fvv * fvv * pvv + sc2 * nm[3] * nm[3];
     }
-    if (st->has_y) {
+    if (st->has_y && hstpf__fix_exact(f)) {
+        hstpf__fix_t fx;
+        const double b = qss > 0.0 ? qsv / qss : 0.0; /* the speed's regression on the position */
+        hstpf__kalman_fix(f, ns, qss, st->yr, &fx);
+        loglik = fx.loglik;
+        *floored = fx.floored;
+        ns += fx.ds;
+        nv += b * fx.ds;
+        qvv -= b * b * (qss - fx.var);
+        qvv = qvv > 0.0 ? qvv : 0.0;
+        qsv = b * fx.var;
+        qss = fx.var;
+    } else if (st->has_y) {
         const double sy = qss + nm[5] * nm[5];
         const double sd = sqrt(sy);
         const double depth = (double)(f->de.lp_max - f->de.floor);

@@ -168,7 +168,33 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3]);
     }
     r->loglik = 0.0;
-    if (st->has_y) {
+    if (st->has_y && hstpf__fix_exact(f)) {
+        hstpf__fix_t fx;
+        double rg[NZ], shrink;
+        const double zf = sqrt(2.0 * (double)(f->de.lp_max - f->de.floor));
+        double zz = (st->yr - nm[4] - z[0]) / sqrt(p[0] + nm[5] * nm[5]);
+        int j;
+        zz = zz > zf ? zf : (zz < -zf ? -zf : zz);
+        hstpf__kalman_fix(f, z[0], p[0], st->yr, &fx);
+        r->loglik = fx.loglik;
+        r->floored = (uint8_t)fx.floored;
+        r->nis = 0.98 * r->nis + 0.02 * zz * zz; /* on the moments, as below */
+        shrink = p[0] - fx.var;
+        for (i = 0; i < NZ; ++i) { /* each component's regression on the position */
+            rg[i] = p[0] > 0.0 ? p[i * NZ] / p[0] : 0.0;
+        }
+        for (i = 0; i < NZ; ++i) {
+            z[i] += rg[i] * fx.ds;
+        }
+        for (i = 0; i < NZ; ++i) {
+            for (j = 0; j < NZ; ++j) {
+                p[i * NZ + j] -= rg[i] * rg[j] * shrink;
+            }
+        }
+        for (i = 0; i < NZ; ++i) {
+            p[i * NZ + i] = p[i * NZ + i] > 0.0 ? p[i * NZ + i] : 0.0;
+        }
+    } else if (st->has_y) {
         const double sy = p[0] + nm[5] * nm[5], sd = sqrt(sy);
         const double depth = (double)(f->de.lp_max - f->de.floor), zf = sqrt(2.0 * depth);
         double zz = (st->yr - nm[4] - z[0]) / sd, az = fabs(zz), ll, gain[NZ];
