@@ -39,7 +39,9 @@ set(HSTPF_BUDGET_INSTR_PARTICLE_STEP 520)  # 471.0 per particle-step
 set(HSTPF_BUDGET_INSTR_KALMAN_MODEL 48500) # 44 013 per model-step
 set(HSTPF_BUDGET_INSTR_GRID_MODEL 895000)  # 743 224 per model-step (20 x 72, refine on, speed lattice on; 779 714 without it, 799 666 before the twelfth session, 809 231 before the moments in float, 882 849 before the kernels were cut at the box's tail, 1 210 420 at 48 x 48)
 set(HSTPF_BUDGET_INSTR_GRID_MODEL_CASE2 893000)  # 811 954 per grid model-step (paper Case 2 inputs, 3 rows and the hypothesis' grid; first measured in the fifteenth session)
-# a 17-row grid bank step with the defaults (Case 1 inputs: Gaussian process
-# noise, grid_rows = 3 rows on the grid, the others on Kalman filters):
-# issue 13's bar, 3 M, not +10 % (measured in the eighteenth session)
+# a 17-row grid bank step with the defaults (Student-t fixes, Gaussian
+# process noise: grid_rows = 3 rows on the grid, the others on Kalman
+# filters that score each fix by its density): issue 13's bar, 3 M, not
+# +10 % (2.60 M in the eighteenth session on Gaussian fixes, 2.74 M in the
+# nineteenth on Student-t fixes)
 set(HSTPF_BUDGET_INSTR_GRID_17ROW_STEP 3000000)
