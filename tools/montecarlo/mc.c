@@ -919,12 +919,13 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     const int all = w->n_jobs * seeds;
     double *tv_all = malloc(sizeof(double) * (size_t)all * MAX_STOPS);
     double *pe_all = malloc(sizeof(double) * (size_t)all);
-    int n_tv_all = 0, n_pe_all = 0, j, i, k;
+    double *td_all = malloc(sizeof(double) * (size_t)all); /* when the truth was declared */
+    int n_tv_all = 0, n_pe_all = 0, n_td_all = 0, n_np = 0, n_td_np = 0, j, i, k;
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
     long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
     double o_pe = 0.0;
     double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
-    if (tv_all == NULL || pe_all == NULL) {
+    if (tv_all == NULL || pe_all == NULL || td_all == NULL) {
         fprintf(stderr, "out of memory\n");
         exit(1);
     }
@@ -950,6 +951,11 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             no += q->false_outside_pair;
             nu += r->final_declared < 0;
             npair += r->final_declared < 0 || in_pair(models, truths[j], r->final_declared);
+            if (r->t_declare >= 0.0) {
+                td_all[n_td_all++] = r->t_declare;
+                n_td_np += !pair;
+            }
+            n_np += !pair;
             for (k = 0; k < q->n_stops; ++k) {
                 tv[ntv++] = q->tv[k];
                 tv_all[n_tv_all++] = q->tv[k];
@@ -1016,12 +1022,13 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "%s{\"seed\":%d,\"false_decl\":%d,\"false_time\":%.0f,\"false_model\":\"%s\","
                         "\"false_at_rest\":%d,\"false_outside_pair\":%d,\"final_declared\":\"%s\","
                         "\"w_rms\":%.5g,\"band_covers\":%d,\"curve_covers\":%d,\"theta_nees\":%.4g,\"d_table\":%.4g,\"near_row\":\"%s\","
-                        "\"nofit_end\":%d,\"q_true_end\":%.4g,",
+                        "\"nofit_end\":%d,\"q_true_end\":%.4g,\"t_declare\":%.0f,",
                         i ? "," : "", w->first_seed + i, r->false_decl, r->false_time,
                         r->false_model >= 0 ? models[r->false_model].name : "", q->false_at_rest,
                         q->false_outside_pair, r->final_declared >= 0 ? models[r->final_declared].name : "",
                         r->w_rms, r->band_covers, r->curve_covers, r->theta_nees, r->d_table,
-                        r->near_row >= 0 ? models[r->near_row].name : "", r->nofit_end, r->q_true_end);
+                        r->near_row >= 0 ? models[r->near_row].name : "", r->nofit_end, r->q_true_end,
+                        r->t_declare);
                 if (w->st->oracle) { /* null: no wrong declaration, or its row not in the oracle's bank */
                     char a[32] = "null", b[32] = "null";
                     if (isfinite(r->or_llr_decl)) {
@@ -1061,6 +1068,11 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
+    /* the truth's own declarations (Table 2's rule): how many and when */
+    printf("the truth declared: %d of %d runs (%.1f%%), outside the pairs %d of %d (%.1f%%); time median %.0f s, "
+           "p90 %.0f s, max %.0f s\n",
+           n_td_all, all, 100.0 * (double)n_td_all / all, n_td_np, n_np, n_np ? 100.0 * (double)n_td_np / n_np : 0.0,
+           pct(td_all, n_td_all, 0.5), pct(td_all, n_td_all, 0.9), pct(td_all, n_td_all, 1.0)); /* -1: none */
     if (o_n > 0) {
         printf("outage: %ld steps without a fix; 95%% coverage there position %.1f%% speed %.1f%%; "
                "max |position error| %.1f m\n",
@@ -1068,6 +1080,7 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     }
     free(tv_all);
     free(pe_all);
+    free(td_all);
 }
 
 #define OFF_TABLE_D 0.10 /* issue 10: a truth this far from every row is off the table */
