@@ -109,6 +109,8 @@ echo "== trains not on Table 1 with Student-t fixes: the grid engine's continuou
 for s in stops-t off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
+# the line with stops with every row on the grid: the truth's declaration, paired with the defaults' 3 rows
+"$mc" --scenario stops-t --seeds "$gseeds" --grid-rows 0 --json "$out/stops-t-allrows.json" | tee "$out/stops-t-allrows.txt"
 for s in off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tee "$out/$s-norefine.txt"
 done

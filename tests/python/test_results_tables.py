@@ -191,3 +191,21 @@ def test_oracle_on_the_table_rows(tmp_path):
     assert table[3] == "| `paper2` | 100 | 228 s (192 s, 248 s) | 0 | 197 s (216 s) | 84 | 27 s | 229 s (252 s); 31 s |"
     assert table[4].startswith("| `paper2-oracle-gauss` | 100 | 291 s (276 s, 315 s) | 0 |")
     assert rt.oracle_on(tmp_path / "none") == ""
+
+
+def test_paired_declaration(tmp_path):
+    # seed by seed: (defaults, every row) declaration times, -1 = never
+    pairs = {"CRH1": [(100, 90), (250, 250), (-1, 300)], "DFH3": [(400, 100), (200, -1), (60, 80)]}
+
+    def js(i):
+        return {"results": [{"truth": t, "runs": [{"seed": k + 1, "t_declare": p[i], "false_decl": int(t == "CRH1"
+                                                                                                       and k == 0 and i == 0)}
+                                                  for k, p in enumerate(pp)]} for t, pp in pairs.items()]}
+    (tmp_path / "stops-t.json").write_text(json.dumps(js(0)))
+    assert rt.paired_declaration(tmp_path, "stops-t", "allrows", "every row") == ""  # the other file missing
+    (tmp_path / "stops-t-allrows.json").write_text(json.dumps(js(1)))
+    row = rt.paired_declaration(tmp_path, "stops-t", "allrows", "every row").splitlines()[2]
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    # declared in both: differences +10, 0, +300, -20: lower median 0, mean 72.5,
+    # sd sqrt((62.5^2 + 72.5^2 + 227.5^2 + 92.5^2) / 3) = 152.2, se 152.2 / 2 = 76.1
+    assert cells == ["6", "5 / 5", "4", "+0, +72.5 +- 76.1", "2 / 1 / 1", "1 / 0"]

@@ -284,6 +284,38 @@ def issue13(d: Path, scenario: str) -> str:
     return "\n".join(out)
 
 
+def paired_declaration(d: Path, scenario: str, tag: str, label: str) -> str:
+    """The truth's own declaration (hstpf-mc's t_declare, -1: never) in
+    scenario.json against scenario-tag.json, seed by seed: how many runs
+    declare it in each, and over the runs that declare it in both the
+    difference of the times (median, mean with its standard error, how
+    many later and sooner). Empty when either file is missing."""
+    fa, fb = d / f"{scenario}.json", d / f"{scenario}-{tag}.json"
+    if not (fa.exists() and fb.exists()):
+        return ""
+
+    def runs(f):
+        return {(tr["truth"], r["seed"]): r for tr in json.loads(f.read_text())["results"] for r in tr["runs"]}
+
+    ra, rb = runs(fa), runs(fb)
+    keys = sorted(set(ra) & set(rb))
+    ta = [ra[k]["t_declare"] for k in keys]
+    tb = [rb[k]["t_declare"] for k in keys]
+    diff = [x - y for x, y in zip(ta, tb) if x >= 0 and y >= 0]
+    n = len(diff)
+    mean = sum(diff) / n if n else 0.0
+    se = (sum((x - mean) ** 2 for x in diff) / (n - 1)) ** 0.5 / n ** 0.5 if n > 1 else 0.0
+    fals = [sum(r[k]["false_decl"] for k in keys) for r in (ra, rb)]
+    out = [f"| runs | the truth declared: defaults / {label} | in both | defaults minus {label}: median, "
+           "mean +- se [s] | later / sooner / same | false declarations: defaults / " + label + " |",
+           "|---|---|---|---|---|---|",
+           f"| {len(keys)} | {sum(t >= 0 for t in ta)} / {sum(t >= 0 for t in tb)} | {n} | "
+           + (f"{median(diff):+.0f}, {mean:+.1f} +- {se:.1f}" if n else "-")
+           + f" | {sum(x > 0 for x in diff)} / {sum(x < 0 for x in diff)} / {sum(x == 0 for x in diff)} | "
+           f"{fals[0]} / {fals[1]} |"]
+    return "\n".join(out)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--dir", default="out/results", help="tools/results.sh's output folder")
@@ -312,6 +344,10 @@ def main(argv=None) -> int:
         if ot:
             print("\n### When the data can tell an off-table truth from a row (hstpf-mc --oracle)\n")
             print(ot)
+        pt = paired_declaration(d, "stops-t", "allrows", "every row on the grid")
+        if pt:
+            print("\n### `stops-t`: the truth's declaration with 3 rows on the grid and with every row\n")
+            print(pt)
         print("\n### The continuous hypothesis's prior weight\n")
         print(prior(d))
         print("\n### The rows' spread\n")
