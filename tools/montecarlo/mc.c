@@ -1068,11 +1068,13 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
-    /* the truth's own declarations (Table 2's rule): how many and when */
-    printf("the truth declared: %d of %d runs (%.1f%%), outside the pairs %d of %d (%.1f%%); time median %.0f s, "
-           "p90 %.0f s, max %.0f s\n",
-           n_td_all, all, 100.0 * (double)n_td_all / all, n_td_np, n_np, n_np ? 100.0 * (double)n_td_np / n_np : 0.0,
-           pct(td_all, n_td_all, 0.5), pct(td_all, n_td_all, 0.9), pct(td_all, n_td_all, 1.0)); /* -1: none */
+    if (on_table(w->sc) && n_td_all > 0) { /* the truth's own declaration at the end (Table 2's rule): how many, since when */
+        printf("the truth declared: %d of %d runs (%.1f%%), outside the pairs %d of %d (%.1f%%); since a median "
+               "%.0f s, p90 %.0f s, max %.0f s\n",
+               n_td_all, all, 100.0 * (double)n_td_all / all, n_td_np, n_np,
+               n_np ? 100.0 * (double)n_td_np / n_np : 0.0, pct(td_all, n_td_all, 0.5), pct(td_all, n_td_all, 0.9),
+               pct(td_all, n_td_all, 1.0));
+    }
     if (o_n > 0) {
         printf("outage: %ld steps without a fix; 95%% coverage there position %.1f%% speed %.1f%%; "
                "max |position error| %.1f m\n",
