@@ -193,16 +193,21 @@ static int ranked(const hstpf_t *f, int want, int lo)
 static void move_copy(hstpf_t *f, uint16_t k, const hstpf_model_t *to, const hstpf_model_t *from)
 {
     real *g = f->grid.geom[k];
-    const real dv = (real)(to->kx[1] - from->kx[1]);
-    g[0] += (real)(to->kx[0] - from->kx[0]);
-    g[2] = g[2] + dv > (real)0 ? g[2] + dv : (real)0; /* no speed below 0 */
+    const double ds = to->kx[0] - from->kx[0], dv = to->kx[1] - from->kx[1];
+    if (!isfinite(ds) || !isfinite(dv)) { /* cannot happen: the filters are in the finite check */
+        return;
+    }
+    g[0] += (real)ds;
+    /* no speed below 0: a box that starts at 0 keeps its speeds (the cells
+     * would have to be remapped; measured small, docs/grid.md) */
+    g[2] = g[2] + (real)dv > (real)0 ? g[2] + (real)dv : (real)0;
 }
 
 /* The grids go to the highest ranked rows: a row without one that ranks
  * above the lowest gridded row takes that row's grid. With copy, it starts
  * from the density of the gridded row that leads, which tracks the same
  * train (its own Kalman filter is a Gaussian, and the fixes' tails are
- * not), moved to its own filter's mean. */
+ * not), moved by the offset of its own filter's mean from the leader's. */
 static void choose_rows(hstpf_t *f, int copy)
 {
     const int src = ranked(f, 1, 0);
@@ -358,6 +363,26 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
     }
 }
 
+/* A gridded row's Kalman filter that has lost the train (hstpf__kalman_lost)
+ * is placed again at its grid's moments; this step's ratios against it
+ * (the rows without a grid, the hypothesis' yardstick) are then taken
+ * against the grid's exact increment. */
+static void anchor_lost(hstpf_t *f)
+{
+    uint16_t l;
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        if (f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2])) {
+            m->kx[0] = (double)m->s_mean;
+            m->kx[1] = (double)m->v_mean;
+            m->kp[0] = (double)m->s_var;
+            m->kp[1] = 0.0;
+            m->kp[2] = (double)m->v_var;
+            m->kll = (double)m->loglik;
+        }
+    }
+}
+
 /* A row without a grid scores against the leading row: the leader's exact
  * increment plus the log ratio of their Kalman filters, within +-1 nat (a
  * fix in a heavy tail puts that Gaussian ratio far beyond the exact
@@ -366,7 +391,9 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
  * every weighted model misses is still told, bank.c all_lost); whether it
  * is held at rest stays its own filter's (the leader's gave larger weight
  * moves across stops: stops-t TV max 0.13 against 0.024, 5 seeds); a filter of
- * its own that lost the train is placed again at the leader's. */
+ * its own that missed the fix or lost the train (hstpf__kalman_lost, against
+ * the leader's grid) is placed again at the leader's, and when lost scores
+ * the leader's increment. */
 static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
 {
     const hstpf_model_t *lead = &f->m[ranked(f, 1, 0)];
@@ -376,11 +403,12 @@ static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
         if (f->grid.slot[l] >= 0) {
             continue;
         }
-        if (st->has_y) {
-            const double r = m->kll - lead->kll;
+        const int lost = hstpf__kalman_lost(lead, m->kx[0], m->kx[1], m->kp[0], m->kp[2]);
+        if (st->has_y) { /* a filter that lost the train says nothing of its row this step */
+            const double r = lost ? 0.0 : m->kll - lead->kll;
             m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
         }
-        if (m->floor_run > 0u) { /* its own filter missed this fix */
+        if (m->floor_run > 0u || lost) { /* its own filter missed this fix, or is far from the train */
             m->kx[0] = lead->kx[0];
             m->kx[1] = lead->kx[1];
             m->kp[0] = lead->kp[0];
@@ -426,6 +454,9 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
         if (f->m[l].floor_hits == hits) {
             missed = 0; /* it fits a fix every row misses: the rows are off */
         }
+    }
+    if (hstpf__refine_yardstick(f) || screened(f)) {
+        anchor_lost(f);
     }
     if (screened(f)) {
         rows_without_grid(f, st);

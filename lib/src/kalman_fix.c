@@ -23,7 +23,10 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
     const hstpf_dist_t *de = &f->de;
     const real sd = (real)sqrt(pss > 0.0 ? pss : 0.0);
     /* cells no wider than a quarter of the noise's interquartile range, so
-     * that a posterior narrowed by its core is resolved */
+     * that a posterior narrowed by its core is resolved, up to
+     * FIX_CELLS_MAX: a prediction wider than twice the range gets wider
+     * cells, and a fix beyond +-FIX_REACH sd of it is seen from the last
+     * cell (a filter that lost the train is placed again: engine.h) */
     const real iqr = hstpf__grid_tail_quantile(&de->qt, 1, (real)0.25) - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.25);
     const real y = (real)(yr - s); /* the fix from the prediction: float keeps cm here */
     real h = (real)(2.0 * FIX_REACH) * sd / (real)FIX_CELLS, x0 = (real)-FIX_REACH * sd;

@@ -242,9 +242,15 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
  * cost, off every row it is the evidence for being off. */
 void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
 {
-    const uint16_t lead = hstpf__leading_row(f);
-    if (st->has_y) { /* the grid engine stepped the rows' filters: m->kll */
-        f->rf.loglik += (double)f->m[lead].loglik - f->m[lead].kll;
+    const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
+    hstpf_refine_t *r = &f->rf;
+    if (hstpf__kalman_lost(m, r->kz[0], r->kz[1], r->kp[0], r->kp[NZ + 1])) {
+        /* the EKF lost the train (engine.h): (s, v) placed again at the
+         * leading row's, theta kept; this step tells nothing of theta */
+        hstpf__refine_replace_sv(f, (double)m->s_mean, (double)m->v_mean, (double)m->s_var, 0.0, (double)m->v_var);
+        r->loglik = st->has_y ? (double)m->loglik : 0.0;
+    } else if (st->has_y) { /* the grid engine stepped the rows' filters: m->kll */
+        r->loglik += (double)m->loglik - m->kll;
     }
 }
 

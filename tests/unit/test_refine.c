@@ -3,6 +3,7 @@
  * fits" for an unmodelled 20 per-mille gradient (Case 1 noise, Student-t
  * fixes, and Case 2 noise), and the hypothesis switched off; the
  * simulator's journey (five stations). */
+#include <math.h>
 #include <string.h>
 
 #include "hstpf_sim.h"
@@ -41,6 +42,10 @@ static void test_band_by_hand(void **state)
 /* A 41-minute line, 17 rows in the bank; returns the last estimate and
  * checks on every step that "no type fits" and a declaration exclude each
  * other. */
+static int kick_k = -1;     /* this step's fix moved by kick_m (an outlier) */
+static double kick_m;
+static double worst_z;      /* largest |position error| / published sd of a valid estimate after 60 s */
+
 static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
                            uint64_t seed, int heavy, uint8_t refine, hstpf_estimate_t *e, int *ever_nofit)
 {
@@ -78,11 +83,17 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
     sc.n_track = n_track;
     hstpf_sim_init(&sim, &sc);
     *ever_nofit = 0;
+    worst_z = 0.0;
     for (k = 0; k < 2460; ++k) {
         hstpf_input_t in;
         hstpf_sim_next_input(&sim, &smp, &in);
+        in.position_m += k == kick_k ? kick_m : 0.0;
         (void)hstpf_step(&filt, &in);
         assert_int_equal(hstpf_estimate(&filt, e), HSTPF_OK);
+        if (k >= 60 && e->valid) {
+            const double z = fabs(e->position_m - smp.s) / (e->position_sd_m + 0.1);
+            worst_z = z > worst_z ? z : worst_z;
+        }
         if (e->fit == HSTPF_FIT_NONE) {
             *ever_nofit = 1;
             assert_int_equal(e->declared, -1);
@@ -197,6 +208,36 @@ static void test_grid_yardstick(void **state)
     check_table_and_climb(1, 1);
 }
 
+/* The same line with the second fix 45 m off while the train stands: the
+ * rows' Kalman filters and the hypothesis' EKF start at 45 m/s, and
+ * scoring each fix by the Student-t density they treated the true fixes
+ * as outliers and ran away; the hypothesis' ratio against the lost
+ * yardstick then took the weight and published its state 800 m from the
+ * train as valid (hstpf-mc stops-t, DF8 seed 75). A filter that lost the
+ * train is placed again at the grid's (engine.h, hstpf__kalman_lost): no
+ * "no type fits", the hypothesis below 0.05 at the end as without the
+ * outlier (0.14 with only the gridded rows' filters placed again, the rows
+ * without a grid scored by their lost filters' ratios), and no
+ * valid position further than 6 published sd (plus 0.1 m) from the train
+ * after the first minute. Before, q_offtable ended at 1.0 (the hypothesis
+ * scored against the lost yardstick). */
+static void test_grid_yardstick_lost(void **state)
+{
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit;
+    (void)state;
+    kick_k = 1;
+    kick_m = 45.0;
+    run_line_noise(&truth, NULL, 0, 3, 1, 1, &e, &nofit);
+    kick_k = -1;
+    print_message("an outlier at acquisition: worst |error| / sd %.2f, q_offtable at the end %.4f\n", worst_z,
+                  (double)e.q_offtable);
+    assert_int_equal(nofit, 0);
+    assert_true(e.q_offtable < 0.05f); /* 0.006, as without the outlier */
+    assert_true(worst_z < 6.0);
+}
+
 /* Case 2's Gamma process noise: with the default refine = 1 the hypothesis
  * is scored on its own grid, the path refine = 2 takes under any noise, so
  * the two give the same estimates bit for bit; on the table and on the
@@ -254,7 +295,7 @@ int main(void)
         cmocka_unit_test(test_band_by_hand),
         cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
         cmocka_unit_test(test_gradient_no_fit), cmocka_unit_test(test_grid_yardstick),
-        cmocka_unit_test(test_grid_case2),
+        cmocka_unit_test(test_grid_yardstick_lost), cmocka_unit_test(test_grid_case2),
         cmocka_unit_test(test_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -301,7 +301,8 @@ typedef struct {
      *  increment is the leading row's exact one plus the log ratio of
      *  their filter to the leader's (at most 1 nat either way), and they
      *  publish the leader's state. A row whose weight passes a gridded
-     *  row's takes that row's grid, started from the leader's density.
+     *  row's takes that row's grid, started from the leader's density
+     *  moved to the row's own Kalman mean.
      *  The workspace then holds min(grid_rows, n_models) row grids, and a
      *  17-row step costs that many grid model-steps plus a 2 x 2 filter
      *  per row. Under non-Gaussian process noise (Case 2's Gamma) every
