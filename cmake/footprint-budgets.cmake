@@ -4,10 +4,14 @@
 # why), not an accident. Each is the value measured when it was set plus a
 # margin of about 10 % (docs/footprint.md has the measurements).
 
-# libhstpf.a flash (code + rodata + data, all objects), bytes; 64 096 measured
+# libhstpf.a flash (code + rodata + data, all objects), bytes; 70 100 measured
 # (59 544 when first set at 64 000; raised in the fourteenth session for
-# refine = 2's grid hypothesis, which took it from 62 136 to about 63 700)
-set(HSTPF_BUDGET_FLASH 70000)
+# refine = 2's grid hypothesis, which took it from 62 136 to about 63 700;
+# raised to 77 000 in the twentieth session: the nineteenth's density update
+# of the rows' filters, kalman_fix.c, and placing again a filter that lost
+# the train, a fix for a valid position published 806 m off, took it past
+# 70 000)
+set(HSTPF_BUDGET_FLASH 77000)
 # libhstpf.a static RAM (data + bss), bytes: the library keeps no state
 set(HSTPF_BUDGET_LIB_RAM 0)
 # An instance per engine and capacity (models x particles; grid 20 x 72),
