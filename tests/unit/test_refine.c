@@ -219,8 +219,9 @@ static void test_grid_yardstick(void **state)
  * outlier (0.14 with only the gridded rows' filters placed again, the rows
  * without a grid scored by their lost filters' ratios), and no
  * valid position further than 6 published sd (plus 0.1 m) from the train
- * after the first minute. Before, q_offtable ended at 1.0 (the hypothesis
- * scored against the lost yardstick). */
+ * after the first minute (an invariant: 3.6 sd before too, the published
+ * sd being wide while the hypothesis led). Before, q_offtable ended at 1.0
+ * (the hypothesis scored against the lost yardstick). */
 static void test_grid_yardstick_lost(void **state)
 {
     const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
