@@ -366,13 +366,13 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
 /* A gridded row's Kalman filter that has lost the train (hstpf__kalman_lost)
  * is placed again at its grid's moments, and k_placed says so: this step's
  * ratios against it (the rows without a grid, the hypothesis' yardstick)
- * are then 0. */
+ * are then taken against the grid's exact increment. */
 static void anchor_lost(hstpf_t *f)
 {
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
-        m->k_placed = (uint8_t)(f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2], 1));
+        m->k_placed = (uint8_t)(f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2]));
         if (m->k_placed) {
             m->kx[0] = (double)m->s_mean;
             m->kx[1] = (double)m->v_mean;
@@ -403,9 +403,9 @@ static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
         if (f->grid.slot[l] >= 0) {
             continue;
         }
-        const int lost = hstpf__kalman_lost(lead, m->kx[0], m->kx[1], m->kp[0], m->kp[2], 0);
-        if (st->has_y) { /* a filter (its own or the leader's) that lost the train says nothing this step */
-            const double r = lost || lead->k_placed ? 0.0 : m->kll - lead->kll;
+        const int lost = hstpf__kalman_lost(lead, m->kx[0], m->kx[1], m->kp[0], m->kp[2]);
+        if (st->has_y) { /* its own filter lost: no ratio; the leader's placed again: against its exact increment */
+            const double r = lost ? 0.0 : m->kll - (lead->k_placed ? (double)lead->loglik : lead->kll);
             m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
         }
         if (m->floor_run > 0u || lost) { /* its own filter missed this fix, or is far from the train */

@@ -244,7 +244,7 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
 {
     const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
     hstpf_refine_t *r = &f->rf;
-    if (hstpf__kalman_lost(m, r->kz[0], r->kz[1], r->kp[0], r->kp[NZ + 1], 0)) {
+    if (hstpf__kalman_lost(m, r->kz[0], r->kz[1], r->kp[0], r->kp[NZ + 1])) {
         /* the EKF lost the train (engine.h): (s, v) placed again at the
          * leading row's, theta kept, with its flags; this step tells
          * nothing of the hypothesis: the leading row's increment */
@@ -252,8 +252,8 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
         r->held = m->held;
         r->floored = (uint8_t)(st->has_y && m->floor_run > 0u);
         r->loglik = st->has_y ? (double)m->loglik : 0.0;
-    } else if (m->k_placed) { /* the leader's yardstick was placed again: no ratio this step */
-        r->loglik = st->has_y ? (double)m->loglik : 0.0;
+    } else if (m->k_placed) { /* the leader's yardstick was placed again: against its exact increment */
+        r->loglik = st->has_y ? r->loglik : 0.0;
     } else if (st->has_y) { /* the grid engine stepped the rows' filters: m->kll */
         r->loglik += (double)m->loglik - m->kll;
     }
