@@ -193,10 +193,7 @@ static int ranked(const hstpf_t *f, int want, int lo)
 static void move_copy(hstpf_t *f, uint16_t k, const hstpf_model_t *to, const hstpf_model_t *from)
 {
     real *g = f->grid.geom[k];
-    const double ds = to->kx[0] - from->kx[0], dv = to->kx[1] - from->kx[1];
-    if (!isfinite(ds) || !isfinite(dv)) { /* cannot happen: the filters are in the finite check */
-        return;
-    }
+    const double ds = to->kx[0] - from->kx[0], dv = to->kx[1] - from->kx[1]; /* finite: finite_models */
     g[0] += (real)ds;
     /* no speed below 0: a box that starts at 0 keeps its speeds (the cells
      * would have to be remapped; measured small, docs/grid.md) */

@@ -250,13 +250,11 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
          * nothing of the hypothesis: the leading row's increment */
         hstpf__refine_replace_sv(f, (double)m->s_mean, (double)m->v_mean, (double)m->s_var, 0.0, (double)m->v_var);
         r->held = m->held;
-        r->floored = (uint8_t)(st->has_y && m->floor_run > 0u);
-        r->loglik = st->has_y ? (double)m->loglik : 0.0;
-    } else if (m->k_placed) { /* the leader's yardstick was placed again: against its exact increment */
-        r->loglik = st->has_y ? r->loglik : 0.0;
-    } else if (st->has_y) { /* the grid engine stepped the rows' filters: m->kll */
+        r->floored = (uint8_t)(m->floor_run > 0u); /* read only with a fix */
+        r->loglik = (double)m->loglik; /* 0 without a fix */
+    } else if (st->has_y && !m->k_placed) { /* the grid engine stepped the rows' filters: m->kll */
         r->loglik += (double)m->loglik - m->kll;
-    }
+    } /* the leader's yardstick placed again: the EKF's own increment, against the leader's exact one */
 }
 
 /* theta's error is the same at every step, not drawn afresh: as a fresh
