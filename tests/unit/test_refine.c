@@ -45,6 +45,7 @@ static void test_band_by_hand(void **state)
 static int kick_k = -1;     /* this step's fix moved by kick_m (an outlier) */
 static double kick_m;
 static double worst_z;      /* largest |position error| / published sd of a valid estimate after 60 s */
+static void (*step_hook)(int k); /* called after each step of run_line_noise */
 
 static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
                            uint64_t seed, int heavy, uint8_t refine, hstpf_estimate_t *e, int *ever_nofit)
@@ -90,6 +91,9 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
         in.position_m += k == kick_k ? kick_m : 0.0;
         (void)hstpf_step(&filt, &in);
         assert_int_equal(hstpf_estimate(&filt, e), HSTPF_OK);
+        if (step_hook != NULL) {
+            step_hook(k);
+        }
         if (k >= 60 && e->valid) {
             const double z = fabs(e->position_m - smp.s) / (e->position_sd_m + 0.1);
             worst_z = z > worst_z ? z : worst_z;
@@ -239,6 +243,62 @@ static void test_grid_yardstick_lost(void **state)
     assert_true(worst_z < 6.0);
 }
 
+/* Mid-journey (Student-t fixes, 3 rows on the grid), the leading row's
+ * Kalman filter and a row without a grid's are moved 500 m off the train:
+ * after the next step both are back within 5 sd of the leading grid, the
+ * leader's flagged as placed again, and neither the hypothesis' weight
+ * against the leader nor the other row's moved by more than 1.5 nats in
+ * that step (scored against the 500 m filters, each would have lost
+ * hundreds). */
+static int hook_lead = -1, hook_other = -1;
+static double hook_dh, hook_dr;
+static void hook_move(int k)
+{
+    uint16_t l;
+    if (k == 600) {
+        for (l = 0; l < filt.cfg.n_models; ++l) { /* the row with the most weight */
+            hook_lead = hook_lead < 0 || filt.m[l].logq > filt.m[hook_lead].logq ? (int)l : hook_lead;
+        }
+        for (l = 0; l < filt.cfg.n_models && hook_other < 0; ++l) {
+            hook_other = filt.grid.slot[l] < 0 ? (int)l : -1;
+        }
+        assert_true(hook_other >= 0 && filt.grid.slot[hook_lead] >= 0);
+        filt.m[hook_lead].kx[0] += 500.0;
+        filt.m[hook_other].kx[0] += 500.0;
+        hook_dh = filt.rf.logq - filt.m[hook_lead].logq;
+        hook_dr = filt.m[hook_other].logq - filt.m[hook_lead].logq;
+    } else if (k == 601) {
+        const hstpf_model_t *m = &filt.m[hook_lead];
+        assert_true(m->k_placed);
+        assert_true(fabs(m->kx[0] - (double)m->s_mean) < 5.0 * sqrt(m->kp[0] + (double)m->s_var));
+        assert_true(fabs(filt.m[hook_other].kx[0] - (double)m->s_mean) < 5.0 * sqrt(m->kp[0] + (double)m->s_var));
+        hook_dh -= filt.rf.logq - m->logq;
+        hook_dr -= filt.m[hook_other].logq - m->logq;
+    }
+}
+
+static int hook_off(void **state) /* teardown: also when the test failed */
+{
+    (void)state;
+    step_hook = NULL;
+    return 0;
+}
+
+static void test_grid_yardstick_placed(void **state)
+{
+    const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    hstpf_estimate_t e;
+    int nofit;
+    (void)state;
+    step_hook = hook_move;
+    run_line_noise(&truth, NULL, 0, 3, 1, 1, &e, &nofit);
+    print_message("filters moved 500 m: the hypothesis' and a row's log weight against the leader moved by %.3f and "
+                  "%.3f nats\n", -hook_dh, -hook_dr);
+    assert_true(hook_lead >= 0);
+    assert_true(fabs(hook_dh) < 1.5 && fabs(hook_dr) < 1.5);
+    assert_int_equal(nofit, 0);
+}
+
 /* Case 2's Gamma process noise: with the default refine = 1 the hypothesis
  * is scored on its own grid, the path refine = 2 takes under any noise, so
  * the two give the same estimates bit for bit; on the table and on the
@@ -296,7 +356,8 @@ int main(void)
         cmocka_unit_test(test_band_by_hand),
         cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
         cmocka_unit_test(test_gradient_no_fit), cmocka_unit_test(test_grid_yardstick),
-        cmocka_unit_test(test_grid_yardstick_lost), cmocka_unit_test(test_grid_case2),
+        cmocka_unit_test(test_grid_yardstick_lost), cmocka_unit_test_teardown(test_grid_yardstick_placed, hook_off),
+        cmocka_unit_test(test_grid_case2),
         cmocka_unit_test(test_off),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
