@@ -91,14 +91,13 @@ int hstpf__fix_exact(const hstpf_t *f);
 
 /* A Gaussian filter of the train at (s, v) with variances pss, pvv has
  * lost it when it lies HSTPF__LOST_SD sd (of the two together) from model
- * g's posterior in position or speed (also against another row's grid: by
- * position alone, a review's proposal, heavy-t declared a wrong type in 4
- * runs of 1 700 against 2, the speed telling a lost filter sooner): the
- * grid engine then places it again
+ * g's posterior in position or speed: the grid engine then places it again
  * at g's (engine_grid.c, refine.c). Its density update scores a fix deep in
  * a heavy tail as an outlier and hardly moves, so a filter placed with a
  * wrong speed at acquisition (an outlier among the first two fixes) ran
- * away and never came back (docs/grid.md, "Rows on the grid"). */
+ * away and never came back. Against another row's grid too by speed: by
+ * position alone heavy-t declared a wrong type in 4 runs of 1 700, not 2
+ * (docs/grid.md, "Rows on the grid"). */
 #define HSTPF__LOST_SD 5.0
 static inline int hstpf__kalman_lost(const hstpf_model_t *g, double s, double v, double pss, double pvv)
 {

@@ -360,6 +360,16 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
     }
 }
 
+/* Row m's Kalman filter at mean (s, v), covariance (pss, psv, pvv). */
+static void kalman_set(hstpf_model_t *m, double s, double v, double pss, double psv, double pvv)
+{
+    m->kx[0] = s;
+    m->kx[1] = v;
+    m->kp[0] = pss;
+    m->kp[1] = psv;
+    m->kp[2] = pvv;
+}
+
 /* A gridded row's Kalman filter that has lost the train (hstpf__kalman_lost)
  * is placed again at its grid's moments, and k_placed says so: this step's
  * ratios against it (the rows without a grid, the hypothesis' yardstick)
@@ -371,11 +381,7 @@ static void anchor_lost(hstpf_t *f)
         hstpf_model_t *m = &f->m[l];
         m->k_placed = (uint8_t)(f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2]));
         if (m->k_placed) {
-            m->kx[0] = (double)m->s_mean;
-            m->kx[1] = (double)m->v_mean;
-            m->kp[0] = (double)m->s_var;
-            m->kp[1] = 0.0;
-            m->kp[2] = (double)m->v_var;
+            kalman_set(m, (double)m->s_mean, (double)m->v_mean, (double)m->s_var, 0.0, (double)m->v_var);
         }
     }
 }
@@ -406,11 +412,7 @@ static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
             m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
         }
         if (m->floor_run > 0u || lost) { /* its own filter missed this fix, or is far from the train */
-            m->kx[0] = lead->kx[0];
-            m->kx[1] = lead->kx[1];
-            m->kp[0] = lead->kp[0];
-            m->kp[1] = lead->kp[1];
-            m->kp[2] = lead->kp[2];
+            kalman_set(m, lead->kx[0], lead->kx[1], lead->kp[0], lead->kp[1], lead->kp[2]);
         }
         m->floor_run = lead->floor_run;
         m->floor_hits += (uint32_t)(st->has_y && lead->floor_run > 0u);

@@ -42,10 +42,8 @@ static void test_band_by_hand(void **state)
 /* A 41-minute line, 17 rows in the bank; returns the last estimate and
  * checks on every step that "no type fits" and a declaration exclude each
  * other. */
-static int kick_k = -1;     /* this step's fix moved by kick_m (an outlier) */
-static double kick_m;
 static double worst_z;      /* largest |position error| / published sd of a valid estimate after 60 s */
-static void (*step_hook)(int k); /* called after each step of run_line_noise */
+static void (*step_hook)(int k, hstpf_input_t *in); /* before each step of run_line_noise: may change it */
 
 static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *track, uint16_t n_track,
                            uint64_t seed, int heavy, uint8_t refine, hstpf_estimate_t *e, int *ever_nofit)
@@ -88,12 +86,11 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
     for (k = 0; k < 2460; ++k) {
         hstpf_input_t in;
         hstpf_sim_next_input(&sim, &smp, &in);
-        in.position_m += k == kick_k ? kick_m : 0.0;
+        if (step_hook != NULL) {
+            step_hook(k, &in);
+        }
         (void)hstpf_step(&filt, &in);
         assert_int_equal(hstpf_estimate(&filt, e), HSTPF_OK);
-        if (step_hook != NULL) {
-            step_hook(k);
-        }
         if (k >= 60 && e->valid) {
             const double z = fabs(e->position_m - smp.s) / (e->position_sd_m + 0.1);
             worst_z = z > worst_z ? z : worst_z;
@@ -226,16 +223,26 @@ static void test_grid_yardstick(void **state)
  * after the first minute (an invariant: 3.6 sd before too, the published
  * sd being wide while the hypothesis led). Before, q_offtable ended at 1.0
  * (the hypothesis scored against the lost yardstick). */
+static void hook_kick(int k, hstpf_input_t *in)
+{
+    in->position_m += k == 1 ? 45.0 : 0.0;
+}
+
+static int hook_off(void **state) /* teardown: also when the test failed */
+{
+    (void)state;
+    step_hook = NULL;
+    return 0;
+}
+
 static void test_grid_yardstick_lost(void **state)
 {
     const hstpf_theta_t truth = hstpf_train_types[hstpf_train_type_find("CRH3")];
     hstpf_estimate_t e;
     int nofit;
     (void)state;
-    kick_k = 1;
-    kick_m = 45.0;
+    step_hook = hook_kick;
     run_line_noise(&truth, NULL, 0, 3, 1, 1, &e, &nofit);
-    kick_k = -1;
     print_message("an outlier at acquisition: worst |error| / sd %.2f, q_offtable at the end %.4f\n", worst_z,
                   (double)e.q_offtable);
     assert_int_equal(nofit, 0);
@@ -252,10 +259,11 @@ static void test_grid_yardstick_lost(void **state)
  * hundreds). */
 static int hook_lead = -1, hook_other = -1;
 static double hook_dh, hook_dr;
-static void hook_move(int k)
+static void hook_move(int k, hstpf_input_t *in)
 {
     uint16_t l;
-    if (k == 600) {
+    (void)in;
+    if (k == 601) { /* after step 600 */
         for (l = 0; l < filt.cfg.n_models; ++l) { /* the row with the most weight */
             hook_lead = hook_lead < 0 || filt.m[l].logq > filt.m[hook_lead].logq ? (int)l : hook_lead;
         }
@@ -267,7 +275,7 @@ static void hook_move(int k)
         filt.m[hook_other].kx[0] += 500.0;
         hook_dh = filt.rf.logq - filt.m[hook_lead].logq;
         hook_dr = filt.m[hook_other].logq - filt.m[hook_lead].logq;
-    } else if (k == 601) {
+    } else if (k == 602) { /* after step 601 */
         const hstpf_model_t *m = &filt.m[hook_lead];
         assert_true(m->k_placed);
         assert_true(fabs(m->kx[0] - (double)m->s_mean) < 5.0 * sqrt(m->kp[0] + (double)m->s_var));
@@ -275,13 +283,6 @@ static void hook_move(int k)
         hook_dh -= filt.rf.logq - m->logq;
         hook_dr -= filt.m[hook_other].logq - m->logq;
     }
-}
-
-static int hook_off(void **state) /* teardown: also when the test failed */
-{
-    (void)state;
-    step_hook = NULL;
-    return 0;
 }
 
 static void test_grid_yardstick_placed(void **state)
@@ -356,7 +357,8 @@ int main(void)
         cmocka_unit_test(test_band_by_hand),
         cmocka_unit_test(test_on_table), cmocka_unit_test(test_declared_band),
         cmocka_unit_test(test_gradient_no_fit), cmocka_unit_test(test_grid_yardstick),
-        cmocka_unit_test(test_grid_yardstick_lost), cmocka_unit_test_teardown(test_grid_yardstick_placed, hook_off),
+        cmocka_unit_test_teardown(test_grid_yardstick_lost, hook_off),
+        cmocka_unit_test_teardown(test_grid_yardstick_placed, hook_off),
         cmocka_unit_test(test_grid_case2),
         cmocka_unit_test(test_off),
     };
