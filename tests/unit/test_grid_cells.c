@@ -283,34 +283,49 @@ static double lib_pdf(double e)
     return p > 1e-5 ? p / 0.1 : exp((double)hstpf__dist_logpdf(&gf.de, (hstpf_real_t)e));
 }
 
+/* The sums of the trapezoid rule over [lo, hi] in steps of at most h. */
+static void fix_ref_span(double sm, double pss, double y, double lo, double hi, double h, double acc[3])
+{
+    const long n = (long)ceil((hi - lo) / h);
+    const double d = (hi - lo) / (double)n;
+    long i;
+    for (i = 0; i <= n; ++i) {
+        const double x = lo + (double)i * d;
+        const double w = (i == 0 || i == n ? 0.5 : 1.0) * d * exp(-0.5 * (x - sm) * (x - sm) / pss) /
+                         (sqrt(pss) * 2.5066282746310002) * lib_pdf(y - x);
+        acc[0] += w;
+        acc[1] += w * x;
+        acc[2] += w * x * x;
+    }
+}
+
 /* log p(y), posterior mean and variance of s under N(s; sm, pss) times
- * the fix noise at y - s, by the trapezoid rule on 40 001 points over +-10
- * sd, in double. */
+ * the fix noise at y - s, by the trapezoid rule in double over +-10 sd of
+ * the prediction and +-70 m of the fix (the noises' tables end at 60 m),
+ * in steps of 1 cm or 1/4000 sd, whichever is finer. */
 static void fix_ref(double sm, double pss, double y, double *ll, double *mean, double *var)
 {
-    const double sd = sqrt(pss), h = 20.0 * sd / 40000.0;
-    double z = 0.0, m1 = 0.0, m2 = 0.0;
-    int i;
-    for (i = 0; i <= 40000; ++i) {
-        const double x = sm - 10.0 * sd + (double)i * h, e = y - x;
-        const double pe = lib_pdf(e);
-        const double w = (i == 0 || i == 40000 ? 0.5 : 1.0) * h * exp(-0.5 * (x - sm) * (x - sm) / pss) /
-                         (sd * 2.5066282746310002) * pe;
-        z += w;
-        m1 += w * x;
-        m2 += w * x * x;
+    const double sd = sqrt(pss), h = fmin(0.01, sd / 4000.0);
+    const double lo1 = sm - 10.0 * sd, hi1 = sm + 10.0 * sd, lo2 = y - 70.0, hi2 = y + 70.0;
+    double acc[3] = {0.0, 0.0, 0.0};
+    if (lo2 < hi1 && lo1 < hi2) {
+        fix_ref_span(sm, pss, y, fmin(lo1, lo2), fmax(hi1, hi2), h, acc);
+    } else {
+        fix_ref_span(sm, pss, y, lo1, hi1, h, acc);
+        fix_ref_span(sm, pss, y, lo2, hi2, h, acc);
     }
-    *ll = log(z);
-    *mean = m1 / z;
-    *var = m2 / z - *mean * *mean;
+    *ll = log(acc[0]);
+    *mean = acc[1] / acc[0];
+    *var = acc[2] / acc[0] - *mean * *mean;
 }
 
 /* hstpf__kalman_fix (kalman_fix.c), the rows' filters' fix under a
  * non-Gaussian fix noise: against the closed-form Kalman update for a
  * Gaussian fix noise, and against the trapezoid rule above on the
  * library's density of the multipath mixture (95 % N(0, 2.24 m), 5 %
- * N(0, 10 m), as hstpf-mc's heavy-mix), at predicted sd 0.5, 2 and 10 m
- * and fixes 0, 2 and -4 sd of the innovation away and beyond the floor.
+ * N(0, 10 m), as hstpf-mc's heavy-mix), at predicted sd 0.5, 2, 10, 50
+ * and 200 m (wider than the noise: the noise's core gets cells of its own)
+ * and fixes 0, 2, -4, 8 and 25 sd of the innovation away.
  * Tolerances: 0.06 nats, 3 % of the posterior's sd for its mean and 5 %
  * for its variance. The filter's cells are half an sd of the prediction or
  * a quarter of the noise's interquartile range, and its midpoint rule is
@@ -323,7 +338,7 @@ static void fix_ref(double sm, double pss, double y, double *ll, double *mean, d
 static void test_fix_reference(void **state)
 {
     static const char *const names[] = {"CRH1", "CRH3", "CRH5"};
-    static const double sds[3] = {0.5, 2.0, 10.0}, offs[4] = {0.0, 2.0, -4.0, 25.0};
+    static const double sds[5] = {0.5, 2.0, 10.0, 50.0, 200.0}, offs[5] = {0.0, 2.0, -4.0, 8.0, 25.0};
     hstpf_theta_t rows[3];
     hstpf_config_t c;
     int table, a, b, j;
@@ -350,8 +365,8 @@ static void test_fix_reference(void **state)
         tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
         assert_int_equal(hstpf__fix_exact(&gf), table); /* the Gaussian keeps the closed form */
-        for (a = 0; a < 3; ++a) {
-            for (b = 0; b < 4; ++b) {
+        for (a = 0; a < 5; ++a) {
+            for (b = 0; b < 5; ++b) {
                 const double sm = 500.0, pss = sds[a] * sds[a], y = sm + offs[b] * sqrt(pss + 5.0);
                 double ll, mean, var;
                 hstpf__fix_t fx;
@@ -365,10 +380,18 @@ static void test_fix_reference(void **state)
                     TU_CLOSE(sm + fx.ds, sm + pss / sy * inn, 0.05 * sqrt(pss * r / sy));
                     TU_CLOSE(fx.var, pss * r / sy, 0.05 * pss * r / sy);
                 }
-                if (ll < (double)gf.de.floor + 1.0) { /* beyond the floor: not used, scored at most the floor */
-                    assert_true(fx.floored);
-                    assert_true(fx.loglik <= (double)gf.de.floor + 1e-3);
-                    assert_true(fx.ds == 0.0 && fx.var == pss);
+                if (ll < (double)gf.de.floor + 1.0) {
+                    /* beyond the floor the reference's range (+-10 sd, +-70 m)
+                     * holds the filter's cells: no more likelihood than it */
+                    assert_true(fx.loglik <= ll + 0.06);
+                    if (!table && sds[a] >= 50.0 && offs[b] >= 8.0) {
+                        /* a prediction 8 and 25 sd from a fix of this light-
+                         * tailed noise: the posterior is the noise's core at
+                         * the fix (the reference's variance 4.0) */
+                        assert_true(fx.floored);
+                        TU_CLOSE(sm + fx.ds, mean, 0.03 * sqrt(var));
+                        TU_CLOSE(fx.var, var, 0.05 * var);
+                    }
                     continue;
                 }
                 assert_false(fx.floored);
