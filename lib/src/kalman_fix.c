@@ -109,12 +109,13 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
          * its CORE_TAIL quantiles) gets cells of its own where the
          * prediction's cells cannot see it: cells wider than hmax (a
          * prediction far wider than the noise: the core's cells replace
-         * them there), or a core beyond +-FIX_REACH sd (a filter far from
-         * the fix, whose posterior lies at the fix all the same when the
-         * noise's tail is lighter than the prediction's). */
+         * them there), or a core centred beyond +-FIX_REACH sd (a filter
+         * far from the fix, whose posterior lies at the fix all the same
+         * when the noise's tail is lighter than the prediction's). */
         const real nlo = y - hstpf__grid_tail_quantile(&de->qt, 1, (real)CORE_TAIL);
         const real nhi = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)CORE_TAIL);
-        const int coarse = h > hmax;
+        const real nmid = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.5);
+        const int coarse = h > hmax, far = nmid < -reach || nmid > reach;
         for (i = 0; i < n; ++i) {
             const real a = -reach + (real)i * h, b = a + h;
             if (!coarse || b <= nlo || a >= nhi) {
@@ -130,7 +131,7 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
         }
         if (coarse) {
             add_span(de, y, sd, nlo, nhi, hmax, &c);
-        } else {
+        } else if (far) { /* the core beyond the span (a heavy tail's core reaches into it: cells there are the span's) */
             if (nlo < -reach) {
                 add_span(de, y, sd, nlo, nhi < -reach ? nhi : -reach, hmax, &c);
             }
