@@ -78,7 +78,7 @@ typedef struct {
     double loglik;    /* log p(y), with the grid's floor */
     double ds;        /* posterior mean of the position minus s */
     double var;       /* posterior variance of the position */
-    int floored;      /* the prediction missed the fix: every cell of its span beyond the floor */
+    int floored;      /* every cell of the prediction's +-6 sd beyond the floor: ds = 0, var = pss */
 } hstpf__fix_t;
 void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf__fix_t *out);
 

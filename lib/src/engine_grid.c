@@ -352,7 +352,6 @@ static void rows_kalman_step(hstpf_t *f, const hstpf__step_t *st)
         uint8_t held;
         int floored;
         m->kll = hstpf__kalman_step(f, m, st, &held, &floored);
-        m->k_skip = (uint8_t)(st->has_y && floored); /* anchor_lost adds the lost */
         if (f->grid.slot[l] < 0) {
             m->held = held;
             m->loglik = 0;
@@ -372,20 +371,18 @@ static void kalman_set(hstpf_model_t *m, double s, double v, double pss, double 
 }
 
 /* A gridded row's Kalman filter that has lost the train (hstpf__kalman_lost)
- * is placed again at its grid's moments. Then, or when its prediction
- * missed the fix (rows_kalman_step), k_skip says so: this step's ratios
- * against it (the rows without a grid, the hypothesis' yardstick) are
- * taken against the grid's exact increment. */
+ * is placed again at its grid's moments, and k_placed says so: this step's
+ * ratios against it (the rows without a grid, the hypothesis' yardstick)
+ * are then taken against the grid's exact increment. */
 static void anchor_lost(hstpf_t *f)
 {
     uint16_t l;
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
-        const int lost = f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2]);
-        if (lost) {
+        m->k_placed = (uint8_t)(f->grid.slot[l] >= 0 && hstpf__kalman_lost(m, m->kx[0], m->kx[1], m->kp[0], m->kp[2]));
+        if (m->k_placed) {
             kalman_set(m, (double)m->s_mean, (double)m->v_mean, (double)m->s_var, 0.0, (double)m->v_var);
         }
-        m->k_skip = (uint8_t)(f->grid.slot[l] >= 0 && (m->k_skip || lost));
     }
 }
 
@@ -411,7 +408,7 @@ static void rows_without_grid(hstpf_t *f, const hstpf__step_t *st)
         }
         const int lost = hstpf__kalman_lost(lead, m->kx[0], m->kx[1], m->kp[0], m->kp[2]);
         if (st->has_y) { /* its own filter lost: no ratio; the leader's placed again: against its exact increment */
-            const double r = lost ? 0.0 : m->kll - (lead->k_skip ? (double)lead->loglik : lead->kll);
+            const double r = lost ? 0.0 : m->kll - (lead->k_placed ? (double)lead->loglik : lead->kll);
             m->loglik = (real)((double)lead->loglik + (r < -1.0 ? -1.0 : (r > 1.0 ? 1.0 : r)));
         }
         if (m->floor_run > 0u || lost) { /* its own filter missed this fix, or is far from the train */

@@ -17,16 +17,16 @@
 #define FIX_CELLS 24     /* cells at least, over +-FIX_REACH sd of the prediction */
 #define FIX_CELLS_MAX 96 /* at most: a prediction far wider than the noise (acquisition) */
 #define FIX_REACH 6.0    /* the Gaussian's mass beyond: 2e-9 */
-#define CORE_TAIL 1e-4   /* the noise's core: its 0.01 % .. 99.99 % quantiles */
-#define CORE_CELLS 48    /* at most, over the core */
+#define CORE_TAIL 1e-4   /* the noise's core: its 0.01 % .. 99.99 % quantiles around the fix */
+#define CORE_GROW 1.1    /* the core's cells widen by this from its median outwards */
+#define CORE_SIDE 48     /* cells at most on each side of it */
 
-/* The sums over cells, relative to the largest log-weight so far, and
- * the position moments about that cell's midpoint (in float, moments about
- * a point far from the posterior would cancel: a fix 1 km from s). */
+/* The sums over cells, relative to the largest log-weight so far, and the
+ * position moments about that cell's midpoint (in float, moments about a
+ * point far from the posterior would cancel: a fix 1 km from s). */
 typedef struct {
     real lmax, piv, wsum, m1, m2;
-    int all_floor;  /* every cell so far beyond the noise's floor */
-    int span_floor; /* every cell so far within the prediction's span beyond it */
+    int floored; /* every cell so far within the prediction's span beyond the floor */
 } fix_sum_t;
 
 /* Cell [a, a + h] (from s) of the prediction N(0, sd): the fix noise over
@@ -35,7 +35,6 @@ typedef struct {
 static void add_cell(const hstpf_dist_t *de, real y, real sd, real a, real h, fix_sum_t *c)
 {
     const real x = a + (real)0.5 * h, z = x / sd;
-    const int in_span = z >= (real)-FIX_REACH && z <= (real)FIX_REACH;
     const real l = hstpf__grid_cell_loglik(de, y - (a + h), y - a);
     real li = l, lw, w;
     if (l < de->floor) {
@@ -43,8 +42,7 @@ static void add_cell(const hstpf_dist_t *de, real y, real sd, real a, real h, fi
         li = fl < de->floor ? fl : de->floor;
         li = l > li ? l : li;
     }
-    c->all_floor = c->all_floor && li <= de->floor;
-    c->span_floor = c->span_floor && (li <= de->floor || !in_span);
+    c->floored = c->floored && (li <= de->floor || z < (real)-FIX_REACH || z > (real)FIX_REACH);
     lw = li - (real)0.5 * z * z;
     if (lw > c->lmax) {
         const real r = hstpf__exp_neg(c->lmax - lw), d = x - c->piv;
@@ -62,16 +60,26 @@ static void add_cell(const hstpf_dist_t *de, real y, real sd, real a, real h, fi
     c->m2 += w * (x - c->piv) * (x - c->piv);
 }
 
-/* [lo, hi] in cells no wider than hmax, at most nmax of them. */
-static void add_span(const hstpf_dist_t *de, real y, real sd, real lo, real hi, real hmax, fix_sum_t *c)
+/* Cells from c0 towards edge (either side), the first w0 wide, each
+ * CORE_GROW times wider: fine where the noise's density is high, few in
+ * its tail. They stop at edge, at CORE_SIDE cells, or where they would be
+ * wider than wmax (the prediction's own cells are then as fine), unless
+ * they must reach edge (reach: the last cell then goes to it); returns
+ * where they stopped. */
+static real add_side(const hstpf_dist_t *de, real y, real sd, real c0, real edge, real w0, real wmax, int reach,
+                     fix_sum_t *c)
 {
-    const real k = (hi - lo) / hmax;
-    const int n = k < (real)(CORE_CELLS - 1) ? (int)k + 1 : CORE_CELLS;
-    const real h = (hi - lo) / (real)n;
-    int i;
-    for (i = 0; i < n; ++i) {
-        add_cell(de, y, sd, lo + (real)i * h, h, c);
+    const real dir = edge > c0 ? (real)1 : (real)-1;
+    real a = c0, w = w0;
+    int k;
+    for (k = 0; k < CORE_SIDE && (edge - a) * dir > (real)0 && (reach || w <= wmax); ++k) {
+        real b = a + dir * w;
+        b = (b - edge) * dir > (real)0 || (reach && k == CORE_SIDE - 1) ? edge : b;
+        add_cell(de, y, sd, dir > (real)0 ? a : b, (b - a) * dir, c);
+        a = b;
+        w *= (real)CORE_GROW;
     }
+    return a;
 }
 
 void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf__fix_t *out)
@@ -82,11 +90,15 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
      * that a posterior narrowed by its core is resolved, up to
      * FIX_CELLS_MAX over the prediction's +-FIX_REACH sd */
     const real iqr = hstpf__grid_tail_quantile(&de->qt, 1, (real)0.25) - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.25);
-    const real hmax = (real)0.25 * iqr;
+    const real hmax = (real)0.25 * iqr > DS_MIN ? (real)0.25 * iqr : DS_MIN;
     const real y = (real)(yr - s); /* the fix from the prediction: float keeps cm here */
-    real h = (real)2.0 * reach / (real)FIX_CELLS;
+    /* the positions at which the fix noise is in its core, and its median */
+    const real nlo = y - hstpf__grid_tail_quantile(&de->qt, 1, (real)CORE_TAIL);
+    const real nhi = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)CORE_TAIL);
+    const real nmid = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.5);
+    real h = (real)2.0 * reach / (real)FIX_CELLS, cl = nmid, ch = nmid; /* the core's cells in the span */
     fix_sum_t c;
-    int i, n = FIX_CELLS;
+    int i, n = FIX_CELLS, coarse, far;
     out->ds = 0.0;
     out->var = pss;
     out->floored = 0;
@@ -101,49 +113,41 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
         n = k < (real)(FIX_CELLS_MAX - 1) ? (int)k + 1 : FIX_CELLS_MAX;
         h = (real)2.0 * reach / (real)n;
     }
+    /* The noise's core gets cells of its own where the prediction's cells
+     * cannot see it: cells wider than hmax (a prediction far wider than
+     * the noise; the core's cells replace them where these are finer), or
+     * a median beyond the span (a filter far from the fix, whose posterior
+     * may lie at the fix or between: the core's cells reach back to the
+     * span's edge, which the span's own cells cover). */
+    coarse = h > hmax;
+    far = nmid > reach || nmid < -reach;
     c.lmax = (real)-3e38;
     c.piv = c.wsum = c.m1 = c.m2 = 0;
-    c.all_floor = c.span_floor = 1;
-    {
-        /* The noise's core (the positions at which the fix noise is within
-         * its CORE_TAIL quantiles) gets cells of its own where the
-         * prediction's cells cannot see it: cells wider than hmax (a
-         * prediction far wider than the noise: the core's cells replace
-         * them there), or a core centred beyond +-FIX_REACH sd (a filter
-         * far from the fix, whose posterior lies at the fix all the same
-         * when the noise's tail is lighter than the prediction's). */
-        const real nlo = y - hstpf__grid_tail_quantile(&de->qt, 1, (real)CORE_TAIL);
-        const real nhi = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)CORE_TAIL);
-        const real nmid = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.5);
-        const int coarse = h > hmax, far = nmid < -reach || nmid > reach;
-        for (i = 0; i < n; ++i) {
-            const real a = -reach + (real)i * h, b = a + h;
-            if (!coarse || b <= nlo || a >= nhi) {
-                add_cell(de, y, sd, a, h, &c);
-                continue;
-            }
-            if (a < nlo) {
-                add_cell(de, y, sd, a, nlo - a, &c);
-            }
-            if (b > nhi) {
-                add_cell(de, y, sd, nhi, b - nhi, &c);
-            }
+    c.floored = 1;
+    if (far) {
+        add_side(de, y, sd, nmid, nmid > reach ? nhi : nlo, hmax, (real)3e38, 1, &c);
+        add_side(de, y, sd, nmid, nmid > reach ? reach : -reach, hmax, (real)3e38, 1, &c);
+    } else if (coarse) {
+        ch = add_side(de, y, sd, nmid, nhi, hmax, h, 0, &c);
+        cl = add_side(de, y, sd, nmid, nlo, hmax, h, 0, &c);
+    }
+    for (i = 0; i < n; ++i) { /* the span, without the core's cells [cl, ch] */
+        const real a = -reach + (real)i * h, b = a + h;
+        if (far || !coarse || b <= cl || a >= ch) {
+            add_cell(de, y, sd, a, h, &c);
+            continue;
         }
-        if (coarse) {
-            add_span(de, y, sd, nlo, nhi, hmax, &c);
-        } else if (far) { /* the core beyond the span (a heavy tail's core reaches into it: cells there are the span's) */
-            if (nlo < -reach) {
-                add_span(de, y, sd, nlo, nhi < -reach ? nhi : -reach, hmax, &c);
-            }
-            if (nhi > reach) {
-                add_span(de, y, sd, nlo > reach ? nlo : reach, nhi, hmax, &c);
-            }
+        if (a < cl) {
+            add_cell(de, y, sd, a, cl - a, &c);
+        }
+        if (b > ch) {
+            add_cell(de, y, sd, ch, b - ch, &c);
         }
     }
-    out->floored = c.span_floor; /* the prediction missed the fix */
+    out->floored = c.floored; /* the prediction missed the fix */
     /* the Gaussian's density is 1 / (sd sqrt(2 pi)) at its centre */
     out->loglik = (double)c.lmax + (c.wsum > (real)0 ? log((double)c.wsum / (double)sd * 0.3989422804014327) : 0.0);
-    if (c.all_floor || !(c.wsum > (real)0)) { /* every cell beyond the floor: the fix is not used */
+    if (c.floored || !(c.wsum > (real)0)) { /* the fix is not used (a filter that lost the train: engine.h) */
         return;
     }
     c.m1 /= c.wsum;

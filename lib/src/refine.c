@@ -252,11 +252,9 @@ void hstpf__refine_anchor(hstpf_t *f, const hstpf__step_t *st)
         r->held = m->held;
         r->floored = (uint8_t)(m->floor_run > 0u); /* read only with a fix */
         r->loglik = (double)m->loglik; /* 0 without a fix */
-    } else if (st->has_y && r->floored) { /* its prediction missed the fix: no ratio, the leader's increment */
-        r->loglik = (double)m->loglik;
-    } else if (st->has_y && !m->k_skip) { /* the grid engine stepped the rows' filters: m->kll */
+    } else if (st->has_y && !m->k_placed) { /* the grid engine stepped the rows' filters: m->kll */
         r->loglik += (double)m->loglik - m->kll;
-    } /* the leader's yardstick missed or placed again: the EKF's own increment, against the leader's exact one */
+    } /* the leader's yardstick placed again: the EKF's own increment, against the leader's exact one */
 }
 
 /* theta's error is the same at every step, not drawn afresh: as a fresh

@@ -283,7 +283,7 @@ static void hook_move(int k, hstpf_input_t *in)
         hook_dr = filt.m[hook_other].logq - filt.m[hook_lead].logq;
     } else if (k == 602) { /* after step 601 */
         const hstpf_model_t *m = &filt.m[hook_lead];
-        assert_true(m->k_skip);
+        assert_true(m->k_placed);
         assert_true(fabs(m->kx[0] - (double)m->s_mean) < 5.0 * sqrt(m->kp[0] + (double)m->s_var));
         assert_true(fabs(filt.m[hook_other].kx[0] - (double)m->s_mean) < 5.0 * sqrt(m->kp[0] + (double)m->s_var));
         hook_dh -= filt.rf.logq - m->logq;

@@ -502,7 +502,7 @@ typedef struct {
     hstpf_real_t s_mean, v_mean, ess, loglik;
     hstpf_real_t s_var, v_var;            /* posterior variances */
     uint8_t held;                         /* the whole posterior held at rest this step */
-    uint8_t k_skip;                       /* grid engine: its Kalman filter missed the fix or was placed again */
+    uint8_t k_placed;                     /* grid engine: its Kalman filter placed again this step */
     uint32_t floor_hits, reacquired;
     uint16_t floor_run;                   /* consecutive all-floor steps */
     uint16_t track_hint;
