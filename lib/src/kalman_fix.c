@@ -102,6 +102,11 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
     out->ds = 0.0;
     out->var = pss;
     out->floored = 0;
+    if (!(pss < 1e30) || !(yr - s < 1e30 && yr - s > -1e30)) { /* not finite: nothing to take */
+        out->floored = 1;
+        out->loglik = (double)de->floor;
+        return;
+    }
     if (!(h > DS_MIN)) { /* a point: the density at it */
         const real l = hstpf__dist_logpdf(de, y);
         out->floored = l <= de->floor;
@@ -118,22 +123,33 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
      * the noise; the core's cells replace them where these are finer), or
      * a median beyond the span (a filter far from the fix, whose posterior
      * may lie at the fix or between: the core's cells reach back to the
-     * span's edge, which the span's own cells cover). */
+     * span's edge, and on into the span while its cells are coarser). The
+     * core's cells run on past its quantiles while they are finer than
+     * the span's. */
     coarse = h > hmax;
     far = nmid > reach || nmid < -reach;
     c.lmax = (real)-3e38;
     c.piv = c.wsum = c.m1 = c.m2 = 0;
     c.floored = 1;
     if (far) {
+        const real e = nmid > reach ? reach : -reach;
         add_side(de, y, sd, nmid, nmid > reach ? nhi : nlo, hmax, (real)3e38, 1, &c);
-        add_side(de, y, sd, nmid, nmid > reach ? reach : -reach, hmax, (real)3e38, 1, &c);
+        add_side(de, y, sd, nmid, e, hmax, (real)3e38, 1, &c);
+        if (coarse) { /* the core's part inside the span: cells up to h from its edge */
+            cl = ch = e;
+            if (nmid > reach) {
+                cl = add_side(de, y, sd, e, (real)-3e38, hmax, h, 0, &c);
+            } else {
+                ch = add_side(de, y, sd, e, (real)3e38, hmax, h, 0, &c);
+            }
+        }
     } else if (coarse) {
-        ch = add_side(de, y, sd, nmid, nhi, hmax, h, 0, &c);
-        cl = add_side(de, y, sd, nmid, nlo, hmax, h, 0, &c);
+        ch = add_side(de, y, sd, nmid, (real)3e38, hmax, h, 0, &c);
+        cl = add_side(de, y, sd, nmid, (real)-3e38, hmax, h, 0, &c);
     }
     for (i = 0; i < n; ++i) { /* the span, without the core's cells [cl, ch] */
         const real a = -reach + (real)i * h, b = a + h;
-        if (far || !coarse || b <= cl || a >= ch) {
+        if (!coarse || b <= cl || a >= ch) {
             add_cell(de, y, sd, a, h, &c);
             continue;
         }
@@ -144,10 +160,12 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
             add_cell(de, y, sd, ch, b - ch, &c);
         }
     }
-    out->floored = c.floored; /* the prediction missed the fix */
     /* the Gaussian's density is 1 / (sd sqrt(2 pi)) at its centre */
     out->loglik = (double)c.lmax + (c.wsum > (real)0 ? log((double)c.wsum / (double)sd * 0.3989422804014327) : 0.0);
-    if (c.floored || !(c.wsum > (real)0)) { /* the fix is not used (a filter that lost the train: engine.h) */
+    /* the prediction missed the fix: every cell of its span beyond the
+     * floor, and the core's beyond it do not lift the fix above it */
+    out->floored = c.floored && out->loglik <= (double)de->floor;
+    if (out->floored || !(c.wsum > (real)0)) { /* the fix is not used (a filter that lost the train: engine.h) */
         return;
     }
     c.m1 /= c.wsum;

@@ -369,6 +369,17 @@ static void test_fix_reference(void **state)
         tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
         assert_int_equal(hstpf__fix_exact(&gf), noise > 0); /* the Gaussian keeps the closed form */
+        if (!noise) { /* a fix 7.6 sd from a 10 m prediction: the prediction's cells all beyond the floor, but the
+                       * cells at the fix lift it above: taken, as the reference (72.8 +- 2 m past s) */
+            double ll, mean, var;
+            hstpf__fix_t fx;
+            hstpf__kalman_fix(&gf, 500.0, 100.0, 576.0, &fx);
+            fix_ref(500.0, 100.0, 576.0, &ll, &mean, &var);
+            assert_false(fx.floored);
+            assert_true(fx.loglik > (double)gf.de.floor);
+            TU_CLOSE(fx.loglik, ll, 0.06);
+            TU_CLOSE(500.0 + fx.ds, mean, 0.1 * sqrt(var));
+        }
         for (a = 0; a < 7; ++a) {
             for (b = 0; b < 5; ++b) {
                 const double sm = 500.0, pss = sds[a] * sds[a], y = sm + offs[b] * sqrt(pss + 5.0);
@@ -411,6 +422,15 @@ static void test_fix_reference(void **state)
     }
     print_message("fix taken in %d of 105 cases, %d checked against the reference, %d of them beyond the prediction's 6 sd\n",
                   taken, checked, far);
+    /* a prediction or a fix that is not finite: not taken */
+    {
+        static const double bad[3][2] = {{INFINITY, 501.0}, {NAN, 501.0}, {4.0, NAN}};
+        for (j = 0; j < 3; ++j) {
+            hstpf__fix_t fx;
+            hstpf__kalman_fix(&gf, 500.0, bad[j][0], bad[j][1], &fx);
+            assert_true(fx.floored && isfinite(fx.loglik) && fx.ds == 0.0);
+        }
+    }
     /* a prediction with no spread: the density at the point */
     {
         hstpf__fix_t fx;
