@@ -92,10 +92,7 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
     const real iqr = hstpf__grid_tail_quantile(&de->qt, 1, (real)0.25) - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.25);
     const real hmax = (real)0.25 * iqr > DS_MIN ? (real)0.25 * iqr : DS_MIN;
     const real y = (real)(yr - s); /* the fix from the prediction: float keeps cm here */
-    /* the positions at which the fix noise is in its core, and its median */
-    const real nlo = y - hstpf__grid_tail_quantile(&de->qt, 1, (real)CORE_TAIL);
-    const real nhi = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)CORE_TAIL);
-    const real nmid = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.5);
+    const real nmid = y - hstpf__grid_tail_quantile(&de->qt, 0, (real)0.5); /* where the noise's median puts s */
     real h = (real)2.0 * reach / (real)FIX_CELLS, cl = nmid, ch = nmid; /* the core's cells in the span */
     fix_sum_t c;
     int i, n = FIX_CELLS, coarse, far;
@@ -132,8 +129,10 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
     c.piv = c.wsum = c.m1 = c.m2 = 0;
     c.floored = 1;
     if (far) {
+        /* the core's far end: where the noise's CORE_TAIL quantile puts s */
         const real e = nmid > reach ? reach : -reach;
-        add_side(de, y, sd, nmid, nmid > reach ? nhi : nlo, hmax, (real)3e38, 1, &c);
+        const real end = y - hstpf__grid_tail_quantile(&de->qt, nmid > reach ? 0 : 1, (real)CORE_TAIL);
+        add_side(de, y, sd, nmid, end, hmax, (real)3e38, 1, &c);
         add_side(de, y, sd, nmid, e, hmax, (real)3e38, 1, &c);
         if (coarse) { /* the core's part inside the span: cells up to h from its edge */
             cl = ch = e;
