@@ -3,12 +3,13 @@
  * the stand-ins of the rows without a grid and the continuous hypothesis'
  * yardstick; on the noise's moments a fix in a heavy tail (Student-t,
  * multipath) moves their likelihood ratios far more than the exact
- * densities do. So the predictive position N(s, pss) is cut into cells,
- * each weighted by the fix noise integrated over it (the grid's own
- * measurement, grid_measure.c), which gives the likelihood, and the
- * posterior position's mean and variance, from which the rest of the state
- * follows by its regression on the position (docs/grid.md, "Rows on the
- * grid"). */
+ * densities do. So the predictive position N(s, pss) is cut into cells
+ * over its +-6 sd, and over the noise's core where those cannot see it (a
+ * prediction wider than the noise, a fix beyond the span), each weighted
+ * by the fix noise integrated over it (the grid's own measurement,
+ * grid_measure.c), which gives the likelihood, and the posterior
+ * position's mean and variance, from which the rest of the state follows
+ * by its regression on the position (docs/grid.md, "Rows on the grid"). */
 #include <math.h>
 
 #include "grid.h"
