@@ -102,6 +102,20 @@ real hstpf__grid_prob_in(const hstpf_dist_quantiles_t *d, real a, real b);
 real hstpf__grid_tail_quantile(const hstpf_dist_quantiles_t *d, int upper, real tail);
 /* Log of the mean density of d over [a, b], a < b; -3e38 for zero. */
 real hstpf__grid_cell_loglik(const hstpf_dist_t *d, real a, real b);
+/* The same, scored as the grid scores a cell: beyond the floor, the floor
+ * with its slope at mid (the cell's midpoint), as a particle there would
+ * be (grid_measure.c, kalman_fix.c). */
+static inline real hstpf__grid_cell_score(const hstpf_dist_t *d, real a, real b, real mid)
+{
+    const real lc = hstpf__grid_cell_loglik(d, a, b);
+    real li = lc;
+    if (lc < d->floor) {
+        const real fl = hstpf__dist_logpdf(d, mid);
+        li = fl < d->floor ? fl : d->floor;
+        li = lc > li ? lc : li;
+    }
+    return li;
+}
 
 /* ---- grid_acquire.c ---------------------------------------------------- */
 

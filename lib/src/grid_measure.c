@@ -17,13 +17,7 @@ real hstpf__grid_measure(hstpf_t *f, hstpf_model_t *m, uint16_t l, real yr, int 
     (void)hstpf__grid_marginals(f, p, f->grid.rest[l]);
     for (i = 0; i < NS; ++i) {
         const real x0 = g[0] + (real)i * g[1];
-        const real lc = hstpf__grid_cell_loglik(de, yr - (x0 + g[1]), yr - x0);
-        real li = lc;
-        if (lc < de->floor) { /* beyond the floor: the floor with its slope, as a particle */
-            const real fl = hstpf__dist_logpdf(de, yr - (x0 + (real)0.5 * g[1]));
-            li = fl < de->floor ? fl : de->floor;
-            li = lc > li ? lc : li;
-        }
+        const real li = hstpf__grid_cell_score(de, yr - (x0 + g[1]), yr - x0, yr - (x0 + (real)0.5 * g[1]));
         ll[i] = li;
         if (f->grid.ms[i] > MASS_MIN) {
             lmax = li > lmax ? li : lmax;

@@ -31,18 +31,13 @@ typedef struct {
 } fix_sum_t;
 
 /* Cell [a, a + h] (from s) of the prediction N(0, sd): the fix noise over
- * it, with the grid's floor (grid_measure.c), times the Gaussian at its
- * midpoint times h. */
+ * it as the grid scores a cell, times the Gaussian at its midpoint times
+ * h. */
 static void add_cell(const hstpf_dist_t *de, real y, real sd, real a, real h, fix_sum_t *c)
 {
     const real x = a + (real)0.5 * h, z = x / sd;
-    const real l = hstpf__grid_cell_loglik(de, y - (a + h), y - a);
-    real li = l, lw, w;
-    if (l < de->floor) {
-        const real fl = hstpf__dist_logpdf(de, y - x);
-        li = fl < de->floor ? fl : de->floor;
-        li = l > li ? l : li;
-    }
+    const real li = hstpf__grid_cell_score(de, y - (a + h), y - a, y - x);
+    real lw, w;
     c->floored = c->floored && (li <= de->floor || z < (real)-FIX_REACH || z > (real)FIX_REACH);
     lw = li - (real)0.5 * z * z;
     if (lw > c->lmax) {
@@ -65,17 +60,17 @@ static void add_cell(const hstpf_dist_t *de, real y, real sd, real a, real h, fi
  * CORE_GROW times wider: fine where the noise's density is high, few in
  * its tail. They stop at edge, at CORE_SIDE cells, or where they would be
  * wider than wmax (the prediction's own cells are then as fine), unless
- * they must reach edge (reach: the last cell then goes to it); returns
+ * they must reach it (to_edge: the last cell then goes to it); returns
  * where they stopped. */
-static real add_side(const hstpf_dist_t *de, real y, real sd, real c0, real edge, real w0, real wmax, int reach,
+static real add_side(const hstpf_dist_t *de, real y, real sd, real c0, real edge, real w0, real wmax, int to_edge,
                      fix_sum_t *c)
 {
     const real dir = edge > c0 ? (real)1 : (real)-1;
     real a = c0, w = w0;
     int k;
-    for (k = 0; k < CORE_SIDE && (edge - a) * dir > (real)0 && (reach || w <= wmax); ++k) {
+    for (k = 0; k < CORE_SIDE && (edge - a) * dir > (real)0 && (to_edge || w <= wmax); ++k) {
         real b = a + dir * w;
-        b = (b - edge) * dir > (real)0 || (reach && k == CORE_SIDE - 1) ? edge : b;
+        b = (b - edge) * dir > (real)0 || (to_edge && k == CORE_SIDE - 1) ? edge : b;
         add_cell(de, y, sd, dir > (real)0 ? a : b, (b - a) * dir, c);
         a = b;
         w *= (real)CORE_GROW;
