@@ -352,7 +352,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         fabs(in->position_m - f->origin_m - hstpf__blended_position(f, in->dt_s)) > f->cfg.gate_m) {
         if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
             ++f->outliers;
-            ++f->outlier_run;
+            f->outlier_run = (uint16_t)(f->outlier_run + (f->outlier_run < UINT16_MAX)); /* saturates: 0 means valid */
             /* the step goes on without its fix; the fix is remembered: a
              * run of these may be the new reference */
             gated = 1;
@@ -398,7 +398,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         /* every model that carries weight put this fix beyond its floor:
          * the fixes and the estimate disagree (a train moving although
          * held, a time base that broke); a run of these re-acquires */
-        f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + 1u) : 0u;
+        f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
     }
     /* The first such fix after fixes they fitted is taken for an outlier
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at

@@ -109,13 +109,13 @@ static int32_t check_theta(const hstpf_theta_t *t, const char **field)
     if (!isfinite(t->c0) || !isfinite(t->c1) || !isfinite(t->c2)) {
         return fail(field, "models", HSTPF_E_NONFINITE);
     }
-    if (t->c0 < 0.0 || t->c0 > 50.0) {
+    if (t->c0 < 0.0 || t->c0 > HSTPF_C0_MAX) {
         return fail(field, "models.c0", HSTPF_E_RANGE);
     }
-    if (t->c1 < 0.0 || t->c1 > 1.0) {
+    if (t->c1 < 0.0 || t->c1 > HSTPF_C1_MAX) {
         return fail(field, "models.c1", HSTPF_E_RANGE);
     }
-    if (t->c2 < 0.0 || t->c2 > 0.01) {
+    if (t->c2 < 0.0 || t->c2 > HSTPF_C2_MAX) {
         return fail(field, "models.c2", HSTPF_E_RANGE);
     }
     return HSTPF_OK;

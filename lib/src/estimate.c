@@ -44,22 +44,53 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead)
     return s;
 }
 
-/* Every published value finite and within the header's ranges. */
+/* A position, speed or weight as the header bounds it (finite too). */
+static int pos_ok(double x)
+{
+    return fabs(x) <= HSTPF_POS_MAX_M;
+}
+static int speed_ok(double x)
+{
+    return x >= 0.0 && x <= HSTPF_SPEED_MAX;
+}
+static int prob_ok(double x)
+{
+    return x >= 0.0 && x <= 1.0;
+}
+
+/* Every published value finite and within the header's ranges: the
+ * blend, theta with its covariance, the hypothesis' weight and gain, and
+ * each model's output (NaN fails every comparison below). */
 static int in_ranges(const hstpf_estimate_t *o)
 {
-    const double vals[] = {o->position_m, (double)o->speed_mps, o->position_sd_m, (double)o->speed_sd_mps,
-                           (double)o->theta[0], (double)o->theta[1], (double)o->theta[2],
-                           (double)o->resistance};
+    const double vals[] = {o->position_sd_m, (double)o->speed_sd_mps, (double)o->resistance, (double)o->gain,
+                           (double)o->gain_sd, o->time_s};
+    const double th_max[3] = {HSTPF_C0_MAX, HSTPF_C1_MAX, HSTPF_C2_MAX};
     uint32_t i;
     for (i = 0; i < sizeof vals / sizeof vals[0]; ++i) {
         if (!hstpf__fin(vals[i])) {
             return 0;
         }
     }
+    for (i = 0; i < 6u; ++i) {
+        if (!hstpf__fin((double)o->theta_cov[i])) {
+            return 0;
+        }
+    }
+    for (i = 0; i < 3u; ++i) {
+        if (!((double)o->theta[i] >= 0.0 && (double)o->theta[i] <= th_max[i])) {
+            return 0;
+        }
+    }
+    for (i = 0; i < o->n_models; ++i) {
+        const hstpf_model_out_t *m = &o->model[i];
+        if (!pos_ok(m->position_m) || !speed_ok((double)m->speed_mps) || !prob_ok((double)m->q) ||
+            !hstpf__fin((double)m->ess) || !hstpf__fin((double)m->loglik)) {
+            return 0;
+        }
+    }
     /* (the sds are square roots of values clamped at 0: never negative) */
-    return fabs(o->position_m) <= HSTPF_POS_MAX_M && o->speed_mps >= (real)0 &&
-           (double)o->speed_mps <= HSTPF_SPEED_MAX && o->theta[0] >= (real)0 && o->theta[1] >= (real)0 &&
-           o->theta[2] >= (real)0;
+    return pos_ok(o->position_m) && speed_ok((double)o->speed_mps) && prob_ok((double)o->q_offtable);
 }
 
 /* A row's spread for the band: its likelihood is computed at the nominal

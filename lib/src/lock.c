@@ -18,16 +18,18 @@
 #define ACQ_T12_MIN 1e-6
 
 /* Lock from fixes: with a configured speed prior the first fix starts the
- * filter; otherwise a fix waits for the next one (at most max_gap_s later,
- * with a speed that is physically possible) and both place the models. The
- * model weights and the declaration are kept. Returns 1 when locked now. */
+ * filter; otherwise, and whenever the lock is regained (the prior speaks of
+ * the start: a train stopped at power-up may be at speed after an outage),
+ * a fix waits for the next one (at most max_gap_s later, with a speed that
+ * is physically possible) and both place the models. The model weights and
+ * the declaration are kept. Returns 1 when locked now. */
 int hstpf__acquire(hstpf_t *f, double y, double xu)
 {
     hstpf__acq_t q;
     q.xu = xu;
     q.v0 = f->cfg.init_speed_mps;
     q.t12 = 0.0;
-    if (f->cfg.init_speed_sd <= 0.0) {
+    if (f->cfg.init_speed_sd <= 0.0 || f->ever_locked) {
         const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
         if (!f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {

@@ -201,9 +201,10 @@ int hstpfd_parse_models(hstpfd_config_t *c, const char *text, char *err, size_t 
                 hstpfd__fail(err, err_size, "models: custom entry '%s' must be name:c0:c1:c2", item[i]);
                 return -1;
             }
-            if (!(c0 >= 0.0 && c0 <= 50.0) || !(c1 >= 0.0 && c1 <= 1.0) || !(c2 >= 0.0 && c2 <= 0.01)) {
-                hstpfd__fail(err, err_size, "models: '%s': need c0 in [0,50], c1 in [0,1], c2 in [0,0.01]",
-                             hstpfd__trim(f[0]));
+            if (!(c0 >= 0.0 && c0 <= HSTPF_C0_MAX) || !(c1 >= 0.0 && c1 <= HSTPF_C1_MAX) ||
+                !(c2 >= 0.0 && c2 <= HSTPF_C2_MAX)) {
+                hstpfd__fail(err, err_size, "models: '%s': need c0 in [0,%g], c1 in [0,%g], c2 in [0,%g]",
+                             hstpfd__trim(f[0]), HSTPF_C0_MAX, HSTPF_C1_MAX, HSTPF_C2_MAX);
                 return -1;
             }
             if (add_model(&t, hstpfd__trim(f[0]), c0, c1, c2, err, err_size) != 0) {

@@ -493,6 +493,186 @@ static void test_beyond_ranges_invalid(void **state)
     }
 }
 
+/* ---- valid covers every published value ---------------------------------- */
+
+/* 1 when some published value is outside the header's ranges (the
+ * coefficients' HSTPF_C*_MAX, HSTPF_POS_MAX_M, HSTPF_SPEED_MAX, a weight in
+ * [0, 1], finite sds, covariance and gain), each model's output included;
+ * such an estimate must not be valid. */
+static int out_of_ranges(const hstpf_estimate_t *e)
+{
+    const double th_max[3] = {HSTPF_C0_MAX, HSTPF_C1_MAX, HSTPF_C2_MAX};
+    int bad = !isfinite(e->position_sd_m) || !isfinite((double)e->speed_sd_mps) || !isfinite((double)e->gain) ||
+              !isfinite((double)e->gain_sd) || !isfinite((double)e->resistance) ||
+              !(fabs(e->position_m) <= HSTPF_POS_MAX_M) ||
+              !((double)e->speed_mps >= 0.0 && (double)e->speed_mps <= HSTPF_SPEED_MAX) ||
+              !((double)e->q_offtable >= 0.0 && (double)e->q_offtable <= 1.0);
+    int i;
+    for (i = 0; i < 3; ++i) {
+        bad |= !((double)e->theta[i] >= 0.0 && (double)e->theta[i] <= th_max[i]);
+    }
+    for (i = 0; i < 6; ++i) {
+        bad |= !isfinite((double)e->theta_cov[i]);
+    }
+    for (i = 0; i < e->n_models; ++i) {
+        const hstpf_model_out_t *m = &e->model[i];
+        bad |= !(fabs(m->position_m) <= HSTPF_POS_MAX_M) ||
+               !((double)m->speed_mps >= 0.0 && (double)m->speed_mps <= HSTPF_SPEED_MAX) ||
+               !((double)m->q >= 0.0 && (double)m->q <= 1.0) || !isfinite((double)m->ess) ||
+               !isfinite((double)m->loglik);
+    }
+    return bad;
+}
+
+/* The continuous hypothesis' theta is unbounded above: rows at the top of
+ * the ranges and a traction of HSTPF_U_MAX at a constant 40 m/s (a
+ * resistance no train has) drive its c2 past HSTPF_C2_MAX, with its
+ * weight near 1. The published theta then leaves its range, and valid must
+ * be 0 there (a review's harness found it 1, twenty-second session). And
+ * the particle engine with the widest fix noise the configuration takes
+ * (sd 1e9 m) puts a model's position beyond HSTPF_POS_MAX_M while the blend
+ * is inside: the models' outputs are published too. */
+static void test_valid_within_ranges(void **state)
+{
+    hstpf_config_t c;
+    hstpf_theta_t top[3];
+    double y = 1000.0;
+    int k, outside = 0;
+    (void)state;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    top[0].name = top[1].name = "top";
+    top[0].c0 = HSTPF_C0_MAX;
+    top[0].c1 = HSTPF_C1_MAX;
+    top[0].c2 = HSTPF_C2_MAX;
+    top[1] = top[0];
+    top[2] = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    c.models = top;
+    c.n_models = 3;
+    c.engine = HSTPF_ENGINE_KALMAN;
+    start(&c);
+    for (k = 0; k < 260; ++k) {
+        hstpf_estimate_t e;
+        y += 40.0;
+        (void)step(1.0, k < 60 ? 5.0 : HSTPF_U_MAX, y + (double)((k * 7919) % 5 - 2), 1);
+        e = est();
+        if (out_of_ranges(&e)) {
+            ++outside;
+            assert_false(e.valid);
+        }
+    }
+    assert_true(outside > 0); /* the case was reached */
+
+    base_config(&c, HSTPF_ENGINE_PARTICLE, 1);
+    rows[1] = rows[0];
+    rows[2] = hstpf_train_types[hstpf_train_type_find("CRH5")];
+    c.n_models = 3;
+    c.noise_e.sd = 1e9;
+    start(&c);
+    outside = 0;
+    for (k = 1; k <= 10; ++k) {
+        hstpf_estimate_t e;
+        (void)step(1.0, u_hold(), fix_at(k), 1);
+        e = est();
+        if (out_of_ranges(&e)) {
+            ++outside;
+            assert_false(e.valid);
+        }
+    }
+    assert_true(outside > 0);
+}
+
+/* ---- the speed prior is about the start ------------------------------------ */
+
+/* A unit powered up with the train at rest (prior N(0, 1 m/s)) locks from
+ * the first fix; the train then accelerates at 0.5 m/s^2 to V_TRUE (the
+ * model's own Euler step, u = W(v) + a / xi, xi = 9.81 / (1 + gamma) /
+ * 1000 as hstpf.h defines it). A lock lost at speed (a step longer than
+ * max_gap_s, or hstpf_reacquire) is regained from two fixes at V_TRUE, not
+ * at the prior's 0: within 2 fixes valid again, the speed within 4 of its
+ * sds (two fixes 1 s apart with R = 5 m^2 hold it to 3.2 m/s) and after
+ * 10 fixes within 2 m/s, and no further acquisition in the next 300 s. Each engine. (Placed at
+ * the prior again, the models lost every fix and re-acquired about every
+ * 6 s, publishing a speed near 0 as valid.) */
+static void test_prior_only_at_start(void **state)
+{
+    int i, how;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        for (how = 0; how < 2; ++how) {
+            hstpf_config_t c;
+            hstpf_estimate_t e;
+            const double xi = 9.81 / (1.0 + 0.06) / 1000.0;
+            double s = Y0, v = 0.0, t = 0.0;
+            int k;
+            base_config(&c, engines[i], 1);
+            c.gamma_rot = 0.06;
+            c.init_speed_mps = 0.0;
+            c.init_speed_sd = 1.0;
+            start(&c);
+            for (k = 0; k < 140; ++k) { /* 5 s at rest, then to V_TRUE in 100 s, 35 s at it */
+                const double a = k >= 5 && v < V_TRUE ? 0.5 : 0.0;
+                const double u = v > 0.0 || a > 0.0 ? hstpf_resistance(&rows[0], v) + a / xi : 0.0;
+                assert_int_equal(step(1.0, u, s + 2.0 * sin(1.7 * t), 1), HSTPF_OK);
+                s += v;
+                v += a;
+                t += 1.0;
+            }
+            e = est();
+            assert_true(e.valid);
+            assert_true(fabs((double)e.speed_mps - V_TRUE) < 2.0);
+            assert_int_equal(e.acquisitions, 1);
+            if (how == 0) { /* a receive-clock gap: one step of 31 s */
+                s += 31.0 * V_TRUE;
+                t += 31.0;
+                (void)step(31.0, u_hold(), s + 2.0 * sin(1.7 * t), 1);
+            } else {
+                assert_int_equal(hstpf_reacquire(&f), HSTPF_OK);
+            }
+            for (k = 1; k <= 300; ++k) {
+                s += V_TRUE;
+                t += 1.0;
+                assert_int_equal(step(1.0, u_hold(), s + 2.0 * sin(1.7 * t), 1), HSTPF_OK);
+                e = est();
+                if (k >= 2) {
+                    assert_true(e.valid);
+                }
+                if (e.valid && fabs((double)e.speed_mps - V_TRUE) >= (k >= 10 ? 2.0 : 4.0 * (double)e.speed_sd_mps)) {
+                    fail_msg("engine %d, %s: valid at %.2f m/s, %d s after, the train at %g", i,
+                             how ? "reacquire" : "gap", (double)e.speed_mps, k, V_TRUE);
+                }
+            }
+            assert_int_equal(e.acquisitions, 2);
+        }
+    }
+}
+
+/* ---- run counters saturate --------------------------------------------------- */
+
+/* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
+ * 16-bit. With reacquire_after = 0 (never re-acquire) a reference that
+ * jumped 50 km is gated for good: 65 600 such fixes must never read as
+ * valid (at 65 536 the count wrapped to 0). */
+static void test_runs_saturate(void **state)
+{
+    hstpf_config_t c;
+    double t;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 1);
+    c.reacquire_after = 0;
+    start(&c);
+    t = run_fixes(0.0, 20);
+    assert_true(est().valid);
+    for (k = 1; k <= 65600; ++k) {
+        hstpf_estimate_t e;
+        assert_int_equal(step(1.0, u_hold(), fix_at(t + k) + 5e4, 1), HSTPF_E_OUTLIER);
+        assert_int_equal(hstpf_estimate(&f, &e), HSTPF_OK);
+        if (e.valid) {
+            fail_msg("valid after %d fixes 50 km off", k);
+        }
+    }
+}
+
 /* ---- a lost model redrawn --------------------------------------------------- */
 
 /* model_reacquire_after: a row far from the truth (c2 at its top, 0.01:
@@ -810,6 +990,9 @@ int main(void)
         cmocka_unit_test(test_resample_no_weight),
         cmocka_unit_test(test_pending_fix_expires),
         cmocka_unit_test(test_beyond_ranges_invalid),
+        cmocka_unit_test(test_valid_within_ranges),
+        cmocka_unit_test(test_prior_only_at_start),
+        cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),
         cmocka_unit_test(test_grid_slow_redraw),

@@ -54,12 +54,18 @@ extern "C" {
 /** Largest |speed| accepted in a prior, m/s. */
 #define HSTPF_SPEED_MAX 200.0
 
+/** Largest Davis coefficients a train type may have (and an estimate
+ *  published as valid): c0 N/kN, c1 N/kN per km/h, c2 N/kN per (km/h)^2. */
+#define HSTPF_C0_MAX 50.0
+#define HSTPF_C1_MAX 1.0
+#define HSTPF_C2_MAX 0.01
+
 /** Davis resistance coefficients of one train type (units of Table 1). */
 typedef struct {
     const char *name; /**< display name, may be NULL */
-    double c0;        /**< N/kN, in [0, 50] */
-    double c1;        /**< N/kN per km/h, in [0, 1] */
-    double c2;        /**< N/kN per (km/h)^2, in [0, 0.01] */
+    double c0;        /**< N/kN, in [0, HSTPF_C0_MAX] */
+    double c1;        /**< N/kN per km/h, in [0, HSTPF_C1_MAX] */
+    double c2;        /**< N/kN per (km/h)^2, in [0, HSTPF_C2_MAX] */
 } hstpf_theta_t;
 
 /** Number of rows in hstpf_train_types. */
@@ -196,7 +202,11 @@ typedef struct {
     /** Speed prior at acquisition, m/s. 0 (the default): unknown; the
      *  filter acquires position and speed from its first two fixes (at any
      *  speed, with no other configuration). > 0: the first fix alone
-     *  starts the filter with the speed N(init_speed_mps, init_speed_sd). */
+     *  starts the filter with the speed N(init_speed_mps, init_speed_sd),
+     *  at the first lock after hstpf_init or hstpf_reset; a lock regained
+     *  later (an outage, a clock step, a run of gated fixes,
+     *  hstpf_reacquire) takes the speed from two fixes, whatever the
+     *  train's speed has become. */
     double init_speed_sd;
     hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
     double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
