@@ -31,7 +31,7 @@ def trace(path: Path, with_sd: bool, declared_model: int = 1) -> Path:
             "c0": 0.8 + 0 * t, "c1": 0.0064 + 0 * t, "c2": 0.000115 + 0 * t, "declared": dec,
             "q0": 0.1 + 0 * t, "q1": 0.8 + 0 * t, "q2": 0.1 + 0 * t}
     if with_sd:
-        cols.update(s_sd=S_SD + 0 * t, v_sd=V_SD + 0 * t)
+        cols.update(pos_sd=S_SD + 0 * t, spd_sd=V_SD + 0 * t)  # as hstpf-mc --trace names them
     np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="")
     return path
 

@@ -90,14 +90,20 @@ static double median(const double *x, unsigned n)
     return (n & 1u) ? s[n / 2u] : 0.5 * (s[n / 2u - 1u] + s[n / 2u]);
 }
 
-static void usage(void)
+/* The usage on out: stdout for --help (exit 0), stderr for a bad option (exit 2). */
+static void usage_to(FILE *out)
 {
-    fprintf(stderr,
+    fprintf(out,
             "usage: hstpf-bench [--json] [--case 1|2] [--refine 0|1|2] [--runs N] [--steps N] [--min-time S] [--config MxN]...\n"
             "  [--version]\n"
             "  MxN: M models, N particles; MxK: M models, Kalman engine; MxG: grid engine\n"
             "  default: --runs 9 --steps 1801 --min-time 0.3 --config 3x100 --config 17x1000\n"
             "           --config 3xK --config 17xK --config 3xG --config 17xG\n");
+}
+
+static void usage(void)
+{
+    usage_to(stderr);
 }
 
 static int fill_models(hstpf_theta_t *models, unsigned m)
@@ -177,6 +183,9 @@ int main(int argc, char **argv)
         const char *a = argv[i];
         if (strcmp(a, "--json") == 0) {
             json = 1;
+        } else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            usage_to(stdout);
+            return 0;
         } else if (strcmp(a, "--version") == 0) {
             printf("hstpf-bench %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
             return 0;

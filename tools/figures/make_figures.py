@@ -26,7 +26,7 @@ CASE_NOISE = {1: "Case 1 (Gaussian)", 2: "Case 2 (Gamma)"}
 CASE_SCENARIO = {1: "paper1", 2: "paper2"}
 Z95 = 1.959963984540054
 # sd columns a trace may carry (hstpf-mc --trace), first found is used
-SD_COLUMNS = {"s": ("s_sd", "pos_sd", "position_sd_m"), "v": ("v_sd", "speed_sd", "speed_sd_mps"),
+SD_COLUMNS = {"s": ("s_sd", "pos_sd", "position_sd_m"), "v": ("v_sd", "spd_sd", "speed_sd", "speed_sd_mps"),
               "c0": ("c0_sd",), "c1": ("c1_sd",), "c2": ("c2_sd",)}
 MC_SOURCE = Path(__file__).resolve().parents[1] / "montecarlo" / "mc.c"
 

@@ -1287,10 +1287,11 @@ static const char *engine_name(int e)
                                       : "auto";
 }
 
-static void usage(void)
+/* The usage on out: stdout for --help (exit 0), stderr for a bad option (exit 2). */
+static void usage_to(FILE *out)
 {
     size_t i;
-    fprintf(stderr,
+    fprintf(out,
             "usage: hstpf-mc --scenario NAME [--seeds N [--first-seed K]] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE|-] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
             "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
@@ -1306,9 +1307,14 @@ static void usage(void)
             "  [--grid-rows K]  (grid, Gaussian process noise: the K rows with the largest weights on the grid, 0 = every row)\n"
             "scenarios:");
     for (i = 0; i < sizeof scenarios / sizeof scenarios[0]; ++i) {
-        fprintf(stderr, " %s", scenarios[i].name);
+        fprintf(out, " %s", scenarios[i].name);
     }
-    fprintf(stderr, "\n");
+    fprintf(out, "\n");
+}
+
+static void usage(void)
+{
+    usage_to(stderr);
 }
 
 int main(int argc, char **argv)
@@ -1335,6 +1341,10 @@ int main(int argc, char **argv)
     w.first_seed = 1;
     for (i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage_to(stdout);
+            return 0;
+        }
         if (!strcmp(a, "--version")) {
             printf("hstpf-mc %d.%d.%d\n", HSTPF_VERSION_MAJOR, HSTPF_VERSION_MINOR, HSTPF_VERSION_PATCH);
             return 0;
