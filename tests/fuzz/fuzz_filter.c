@@ -77,9 +77,22 @@ static void check_estimate(const hstpf_estimate_t *e, uint16_t n_models)
                    isfinite((double)e->resistance),
                "valid, theta or resistance not finite");
     FUZZ_CHECK(isfinite(e->time_s), "valid, time %g", e->time_s);
+    FUZZ_CHECK(e->theta[0] >= 0 && (double)e->theta[0] <= HSTPF_C0_MAX && e->theta[1] >= 0 &&
+                   (double)e->theta[1] <= HSTPF_C1_MAX && e->theta[2] >= 0 && (double)e->theta[2] <= HSTPF_C2_MAX,
+               "valid, theta (%g, %g, %g) outside its range", (double)e->theta[0], (double)e->theta[1],
+               (double)e->theta[2]);
+    for (l = 0; l < 6u; ++l) {
+        FUZZ_CHECK(isfinite((double)e->theta_cov[l]), "valid, theta_cov[%u] = %g", l, (double)e->theta_cov[l]);
+    }
+    FUZZ_CHECK(isfinite((double)e->gain) && isfinite((double)e->gain_sd), "valid, gain %g sd %g", (double)e->gain,
+               (double)e->gain_sd);
     for (l = 0; l < n_models; ++l) {
         const hstpf_model_out_t *m = &e->model[l];
         FUZZ_CHECK(isfinite((double)m->q) && m->q >= 0 && m->q <= 1, "valid, q[%u] = %g", l, (double)m->q);
+        FUZZ_CHECK(isfinite(m->position_m) && fabs(m->position_m) <= HSTPF_POS_MAX_M, "valid, model %u at %g", l,
+                   m->position_m);
+        FUZZ_CHECK(m->speed_mps >= 0 && (double)m->speed_mps <= HSTPF_SPEED_MAX, "valid, model %u at %g m/s", l,
+                   (double)m->speed_mps);
         sum += (double)m->q;
     }
     /* the rows and the continuous hypothesis (cfg.refine) share the weight */
