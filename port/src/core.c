@@ -48,9 +48,11 @@ int hstpfd_core_init(hstpfd_core_t *c, const hstpfd_config_t *cfg, hstpf_t *filt
                         ? (int)r
                         : -2;
     }
-    c->tick_us = (int64_t)(cfg->tick_s * 1e6 / cfg->time_scale + 0.5);
-    if (c->tick_us < 1000) {
-        c->tick_us = 1000; /* 1 ms of source time: the poll timeout's resolution */
+    {
+        /* 1 ms of source time at least (the poll timeout's resolution); at
+         * most a day: a time_scale near 0 must not overflow the cast */
+        const double tk = cfg->tick_s * 1e6 / cfg->time_scale + 0.5;
+        c->tick_us = tk < 1000.0 ? 1000 : (tk > 8.64e10 ? INT64_C(86400000000) : (int64_t)tk);
     }
     c->declared_prev = -1;
     (void)hstpf_estimate(filt, &c->est);
@@ -136,12 +138,20 @@ void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 
 /* ---- time and frames --------------------------------------------------- */
 
+/* A scaled source time beyond this many us from the first (30 years) is
+ * held there: the cast to int64 must not overflow (a stamp of 1e12 s at
+ * time_scale 10); set_time takes such a jump for a clock step anyway. */
+#define SCALED_MAX_US 1e15
+
 static int64_t frame_time(const hstpfd_core_t *c, int64_t src)
 {
+    double d;
     if (c->cfg->time_scale == 1.0) {
         return src;
     }
-    return c->src0 + (int64_t)floor((double)(src - c->src0) * c->cfg->time_scale + 0.5);
+    d = floor((double)(src - c->src0) * c->cfg->time_scale + 0.5);
+    d = d > SCALED_MAX_US ? SCALED_MAX_US : (d < -SCALED_MAX_US ? -SCALED_MAX_US : d);
+    return c->src0 + (int64_t)d;
 }
 
 /* A source stamp this far behind the latest time is a step of its clock. */
@@ -270,7 +280,13 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
             c->pos_prev_fix = r.valid;
             c->pos_last_counter = r.counter;
         }
-        if (r.valid) {
+        if (r.valid && !(fabs(r.value) <= HSTPF_POS_MAX_M)) {
+            /* the estimator refuses it (HSTPF_E_RANGE) and its time would
+             * move on with the estimate left as it was, still valid: no fix */
+            ++c->n.pos_range;
+            c->pos_prev_fix = 0;
+            hstpfd_sched_time(&c->sched, c->t_now);
+        } else if (r.valid) {
             hstpfd_sched_position_at(&c->sched, c->t_now, r.value,
                                      r.has_fix_time ? (int32_t)r.fix_time_ms : HSTPFD_NO_FIX_TIME, in_seq);
         } else {

@@ -31,7 +31,7 @@ typedef int (*hstpfd_send_fn)(void *ctx, const hstpfd_frame_t *f);
 typedef struct {
     uint32_t frames, ticks;
     uint32_t position, traction, output, unknown, error, format;
-    uint32_t pos_invalid, trac_invalid, trac_range;
+    uint32_t pos_invalid, pos_range, trac_invalid, trac_range;
     uint32_t err_class[HSTPFD_ERR_N_CLASSES];
     uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
     uint32_t degeneracy;

@@ -335,17 +335,30 @@ void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m)
     hstpfd_sched_position_at(s, t_us, position_m, HSTPFD_NO_FIX_TIME, 0);
 }
 
+/* Fixes whose time has not moved on for this long of receive time are not
+ * new positions (a sender's fix clock stuck: each frame dated a little later
+ * by the least latency's creep, every one decimated, no step ever made and
+ * the estimate left valid): the position goes stale. */
+#define FIX_STUCK_US INT64_C(2000000)
+
 void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m, int32_t fix_ms, int in_sequence)
 {
     int64_t gap;
     const int had_step = s->have_step;
     advance(s, t_us);
-    s->have_pos = 1;
-    s->t_pos = s->t_now; /* staleness runs on the receive clock */
     t_us = s->t_now;
     if (fix_ms >= 0 && fix_ms < HSTPFD_SCHED_FIX_WRAP_MS) {
+        if (!s->have_fix || fix_ms != s->fix_ms_last) {
+            s->fix_adv_rx = s->t_now;
+        } else if (s->t_now - s->fix_adv_rx > FIX_STUCK_US) {
+            /* not dated either: its latency would grow with the receive
+             * clock and hold the predict steps back */
+            return;
+        }
         t_us = fix_time(s, s->t_now, fix_ms, in_sequence);
     }
+    s->have_pos = 1;
+    s->t_pos = s->t_now; /* staleness runs on the receive clock */
     if (!had_step) {
         /* the first step has length first_dt_s and the traction held now */
         s->pos_stale = 0;

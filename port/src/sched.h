@@ -127,6 +127,7 @@ typedef struct {
     uint8_t have_fix;
     int32_t fix_ms_last;
     int64_t fix_u, fix_rx, fix_off;
+    int64_t fix_adv_rx; /* receive time the fix clock last moved on (a stuck one: stale) */
     /* fixes all received later than the least latency by more than a
      * second, since lag_rx, by at least lag_min: a receive clock that
      * stepped forward (a stall's backlog drains in a burst and ends it) */

@@ -101,9 +101,14 @@ int genlog(const genlog_t *g)
             p.pos_valid = 1;
             p.pos_quality = 2;
             p.position = hstpf_frames_position_position_raw(y);
+            if (k >= g->over_from_s && k < g->over_to_s) {
+                p.position = INT64_C(17000000000); /* raw, past the DBC's 1e8 m: the s35 signal reaches 1.7e8 m */
+            }
             if (!g->no_fix_time) { /* the measurement's own time, ms modulo the wrap */
+                const int stuck = g->stuck_fix_from_s > 0 && k >= g->stuck_fix_from_s;
                 p.fix_time_valid = 1;
-                p.fix_time = (uint16_t)((unsigned)(k * 1000 + j * 100) % HSTPF_FIX_TIME_WRAP_MS);
+                p.fix_time = (uint16_t)((unsigned)(stuck ? g->stuck_fix_from_s * 1000 : k * 1000 + j * 100) %
+                                        HSTPF_FIX_TIME_WRAP_MS);
             }
             (void)hstpf_can_position_pack(d, &p, 8);
             (void)hstpf_e2e_protect(&tx_pos, d, 8);

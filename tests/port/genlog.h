@@ -18,6 +18,8 @@ typedef struct {
     double mass_t;   /* train mass for the traction force */
     int no_fix_time; /* 1: position frames without a fix time (FixTimeValid 0) */
     int jitter_ms;   /* receive stamps delayed by a pseudo-random 0..jitter_ms (a loaded gateway; order kept) */
+    int over_from_s, over_to_s; /* positions of [from, to) s sent as the signal's largest, 1.7e8 m */
+    int stuck_fix_from_s;       /* > 0: the fix time stops moving from this second on */
 } genlog_t;
 
 /* Returns 0, or -1 if the file cannot be written. */

@@ -89,7 +89,7 @@ static int is(const char *section, const char *key, const char *text)
 
 static void test_clean_run(void **state)
 {
-    const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T, 0, 0};
+    const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T, 0, 0, 0, 0, 0};
     char line[4096];
     FILE *fp;
     int n = 0;
@@ -142,7 +142,7 @@ static void test_clean_run(void **state)
 
 static void test_faults_counted(void **state)
 {
-    const genlog_t g = {DIR "/faults.log", 600, 1, 1, 1, MASS_T, 0, 0};
+    const genlog_t g = {DIR "/faults.log", 600, 1, 1, 1, MASS_T, 0, 0, 0, 0, 0};
     (void)state;
     generate(&g);
     assert_int_equal(run("--log " DIR "/faults.log " MODELS " --summary " DIR "/faults.json > /dev/null"), 0);
@@ -176,7 +176,7 @@ static void test_deterministic_and_time_scale(void **state)
 {
     static char again[16384];
     double t1;
-    const genlog_t g = {DIR "/fast.log", 600, 0, 10, 1, MASS_T, 0, 0};
+    const genlog_t g = {DIR "/fast.log", 600, 0, 10, 1, MASS_T, 0, 0, 0, 0, 0};
     (void)state;
     assert_int_equal(run("--log " DIR "/clean.log " MODELS " --summary " DIR "/again.json > /dev/null"), 0);
     read_file(DIR "/clean.json", summary, sizeof summary);
@@ -312,14 +312,86 @@ static stream_stats_t stream_stats(const char *path)
     return r;
 }
 
+/* Positions beyond HSTPF_POS_MAX_M for 10 s (the signal reaches 1.7e8 m):
+ * refused as no fix (position_range), so the estimator predicts across
+ * them. The library refused them with HSTPF_E_RANGE while the step time
+ * moved on, and every step published the last position, frozen, as valid
+ * (a review's harness, twenty-second session). */
+static void test_position_beyond_range(void **state)
+{
+    genlog_t g = {DIR "/over.log", 300, 0, 1, 1, MASS_T, 0, 0, 150, 160, 0};
+    static char line[8192];
+    double last = -1.0;
+    int in_window = 0;
+    FILE *fp;
+    (void)state;
+    generate(&g);
+    assert_int_equal(run("--log " DIR "/over.log " MODELS " --out " DIR "/over.jsonl --summary " DIR
+                         "/over.json > /dev/null"),
+                     0);
+    read_file(DIR "/over.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "position_range"), 100);
+    assert_true(is(NULL, "step_errors", "{}"));
+    assert_true(is(NULL, "valid", "true"));
+    fp = fopen(DIR "/over.jsonl", "r");
+    assert_non_null(fp);
+    while (fgets(line, sizeof line, fp) != NULL) {
+        const double t = line_num(line, "t") - (double)GENLOG_T0_US / 1e6, pos = line_num(line, "pos");
+        if (t >= 150.0 && t < 160.0 && strstr(line, "\"valid\":true") != NULL) {
+            assert_true(pos > last + 1.0); /* predicted on, not frozen */
+            assert_true(line_num(line, "y") != line_num(line, "y")); /* no fix (null) */
+            ++in_window;
+        }
+        last = pos;
+    }
+    fclose(fp);
+    assert_true(in_window >= 5);
+}
+
+/* A sender whose fix time stops moving at 150 s while its frames keep
+ * coming: each fix was dated a little later by the least latency's creep,
+ * every one decimated, no step was made after 150 s and the summary said
+ * valid with the position of 150 s. After FIX_STUCK_US (2 s) without a new
+ * fix time the position is stale, and the estimator predicts on. */
+static void test_stuck_fix_time(void **state)
+{
+    genlog_t g = {DIR "/stuck.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 150};
+    (void)state;
+    generate(&g);
+    assert_int_equal(run("--log " DIR "/stuck.log " MODELS " --summary " DIR "/stuck.json > /dev/null"), 0);
+    read_file(DIR "/stuck.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "position_stale"), 1);
+    assert_true(num(NULL, "steps") >= 295.0);    /* the steps go on to the end */
+    assert_true(num(NULL, "predict_steps") >= 140.0);
+}
+
+/* Source times far apart under --time-scale, and a time scale near its
+ * bottom: the scaled times were cast to 64-bit integers out of range
+ * (undefined behaviour: the sanitizer build aborted without a summary). */
+static void test_extreme_time_scale(void **state)
+{
+    FILE *fp = fopen(DIR "/far.log", "w");
+    (void)state;
+    assert_non_null(fp);
+    fputs("(0.000000) vcan0 101#6110583400000000\n(999999999999.000000) vcan0 101#3C11583400000000\n", fp);
+    fclose(fp);
+    assert_int_equal(run("--log " DIR "/far.log " MODELS " --time-scale 10 --summary " DIR "/far.json > /dev/null"), 0);
+    read_file(DIR "/far.json", summary, sizeof summary);
+    assert_true(is(NULL, "end", "\"eof\""));
+    assert_int_equal(run("--log " DIR "/far.log " MODELS " --time-scale 1e-14 --summary " DIR "/far.json > /dev/null"),
+                     0);
+    read_file(DIR "/far.json", summary, sizeof summary);
+    assert_true(is(NULL, "end", "\"eof\""));
+}
+
 /* Issue 12: receive stamps jittered by up to 300 ms (a loaded gateway). With
  * the fix time in the frame the steps are dated by the measurement and the
  * estimate follows the fixes as on a clean log; without it (an older
  * sender) the same jitter becomes position error at 100 m/s. */
 static void test_fix_time_under_jitter(void **state)
 {
-    const genlog_t with = {DIR "/jit.log", 600, 0, 1, 1, MASS_T, 0, 300};
-    const genlog_t without = {DIR "/jit_nofix.log", 600, 0, 1, 1, MASS_T, 1, 300};
+    const genlog_t with = {DIR "/jit.log", 600, 0, 1, 1, MASS_T, 0, 300, 0, 0, 0};
+    const genlog_t without = {DIR "/jit_nofix.log", 600, 0, 1, 1, MASS_T, 1, 300, 0, 0, 0};
     stream_stats_t a, b, clean;
     (void)state;
     generate(&with);
@@ -985,6 +1057,9 @@ int main(void)
         cmocka_unit_test(test_clock_garbage_line),
         cmocka_unit_test(test_clock_step_forward),
         cmocka_unit_test(test_clock_step_back),
+        cmocka_unit_test(test_position_beyond_range),
+        cmocka_unit_test(test_stuck_fix_time),
+        cmocka_unit_test(test_extreme_time_scale),
         cmocka_unit_test(test_clock_step_forward_short),
         cmocka_unit_test(test_stalled_sender),
         cmocka_unit_test(test_sigterm_in_predict_loop),
