@@ -9,12 +9,21 @@
  * cell m) / P(noise within its tail quantiles), for the offsets m in
  * [m0, m0 + n) that lie within +-reach cells (farther ones cannot land on
  * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
+/* The nearest cell offset to x cells, held within +-2^30: a noise spread
+ * over more cells than that (a tiny cell, a huge scale) must not overflow
+ * the cast; its kernel is clipped to the reach below anyway. */
+static int cell_index(real x)
+{
+    const double c = floor((double)(x + (real)0.5));
+    return c > 1073741824.0 ? 1073741824 : (c < -1073741824.0 ? -1073741824 : (int)c);
+}
+
 int hstpf__grid_kernel(const hstpf_dist_quantiles_t *d, real scale, real h, int reach, real tail, real *k, int *m0)
 {
     const real lo = scale * hstpf__grid_tail_quantile(d, 0, tail) / h;
     const real hi = scale * hstpf__grid_tail_quantile(d, 1, tail) / h;
     const int cap = (HSTPF__GRID_K - 1) / 2;
-    int a = (int32_t)floor((double)(lo + (real)0.5)), b = (int32_t)floor((double)(hi + (real)0.5)), m, n;
+    int a = cell_index(lo), b = cell_index(hi), m, n;
     real sum = 0, total, el, eh;
     reach = reach < cap ? reach : cap;
     total = scale > (real)0 ? hstpf__grid_prob_in(d, ((real)a - (real)0.5) * h / scale, ((real)b + (real)0.5) * h / scale)
