@@ -6,24 +6,51 @@
 #include "candump.h"
 #include "source.h"
 
+/* Characters read between two looks at the stop flag in an endless line */
+#define STOP_EVERY 65536L
+
+/* One line into line[size] (its newline dropped): 1, 0 at the end of the
+ * input, -1 for a line longer than the buffer (the rest of it read and
+ * dropped). By bytes, so a NUL inside a line ends only that line's text
+ * (fgets' strchr could not tell it from the end and took the next line
+ * for the rest of a long one); *stop is seen inside an endless line. */
+static int read_line(FILE *fp, char *line, size_t size, volatile sig_atomic_t *stop)
+{
+    size_t k = 0;
+    long seen = 0;
+    int ch, too_long = 0;
+    while ((ch = getc(fp)) != EOF && ch != '\n') {
+        if (k + 1 < size) {
+            line[k++] = (char)ch;
+        } else {
+            too_long = 1;
+        }
+        if (++seen % STOP_EVERY == 0 && *stop) {
+            break;
+        }
+    }
+    line[k] = '\0';
+    if (ch == EOF && k == 0 && !too_long) {
+        return 0;
+    }
+    return too_long ? -1 : 1;
+}
+
 int hstpfd_run_log(hstpfd_core_t *c, const char *path, volatile sig_atomic_t *stop, const char **end)
 {
     FILE *fp = strcmp(path, "-") == 0 ? stdin : fopen(path, "r");
     char line[1024];
-    int first = 1;
+    int first = 1, got;
     *end = HSTPFD_END_ERROR;
     if (fp == NULL) {
         fprintf(stderr, "hstpfd: cannot open log %s: %s\n", path, strerror(errno));
         return -1;
     }
-    while (!*stop && fgets(line, sizeof line, fp) != NULL) {
+    while (!*stop && (got = read_line(fp, line, sizeof line, stop)) != 0) {
         hstpfd_frame_t f;
         char ifc[HSTPFD_NAME_MAX];
         int rc;
-        if (strchr(line, '\n') == NULL && !feof(fp)) {
-            int ch; /* longer than any valid line: skip the rest, count it */
-            while ((ch = fgetc(fp)) != EOF && ch != '\n') {
-            }
+        if (got < 0) { /* longer than any valid line: counted */
             ++c->n.bad_lines;
             continue;
         }

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "candump.h"
 #include "config.h"
@@ -82,6 +83,62 @@ static FILE *open_out(const char *path, const char *what)
         fprintf(stderr, "hstpfd: cannot write %s %s: %s\n", what, path, strerror(errno));
     }
     return fp;
+}
+
+/* Closes an output (stdout is flushed); 0, or -1 with a message when a
+ * write failed (a full disk, /dev/full): what was written is incomplete. */
+static int close_out(FILE *fp, const char *what)
+{
+    int bad;
+    if (fp == NULL) {
+        return 0;
+    }
+    bad = ferror(fp) != 0;
+    bad |= (fp == stdout ? fflush(fp) : fclose(fp)) != 0;
+    if (bad) {
+        fprintf(stderr, "hstpfd: writing %s failed\n", what);
+        return -1;
+    }
+    return 0;
+}
+
+/* The same file (by path, or by device and inode where it exists) */
+static int same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (a[0] == '\0' || b[0] == '\0' || strcmp(a, "-") == 0 || strcmp(b, "-") == 0) {
+        return 0; /* unset, or stdin / stdout */
+    }
+    if (strcmp(a, b) == 0) {
+        return 1;
+    }
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* The log and the outputs are distinct files: an output opened for writing
+ * truncates the log it names, and two outputs in one file tear each other. */
+static int distinct_files(const hstpfd_config_t *c)
+{
+    const char *const path[4] = {c->log, c->out, c->frames_out, c->summary};
+    static const char *const role[4] = {"--log", "--out", "--frames-out", "--summary"};
+    int i, j;
+    for (i = 0; i < 4; ++i) {
+        for (j = i + 1; j < 4; ++j) {
+            if (same_file(path[i], path[j])) {
+                fprintf(stderr, "hstpfd: %s and %s name the same file %s\n", role[i], role[j], path[j]);
+                return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+/* Only a regular file is read twice: the format check would take the
+ * start of a pipe or FIFO (and block on a FIFO with no writer). */
+static int regular_file(const char *path)
+{
+    struct stat st;
+    return strcmp(path, "-") != 0 && stat(path, &st) == 0 && S_ISREG(st.st_mode);
 }
 
 int main(int argc, char **argv)
@@ -192,7 +249,10 @@ int main(int argc, char **argv)
         return bad(err);
     }
 
-    if (cfg.log[0] != '\0' && hstpfd_candump_check_file(cfg.log, err, sizeof err) != 0) {
+    if (!distinct_files(&cfg)) {
+        return 2;
+    }
+    if (cfg.log[0] != '\0' && regular_file(cfg.log) && hstpfd_candump_check_file(cfg.log, err, sizeof err) != 0) {
         fprintf(stderr, "hstpfd: %s\n", err);
         return 1;
     }
@@ -240,17 +300,17 @@ int main(int argc, char **argv)
         rc = hstpfd_run_log(&core, cfg.log, &stop_flag, &end);
     }
 
-    if (out != NULL && out != stdout) {
-        (void)fclose(out);
-    } else if (out == stdout) {
-        (void)fflush(stdout);
+    if (close_out(out, "the step stream") != 0) {
+        rc = -1;
     }
-    if (frames_out != NULL && frames_out != stdout) {
-        (void)fclose(frames_out);
+    if (frames_out != out && close_out(frames_out, "the frame log") != 0) {
+        rc = -1;
     }
     hstpfd_core_summary(&core, stdout, cfg.iface[0] != '\0' ? "iface" : "log",
                         cfg.iface[0] != '\0' ? cfg.iface : cfg.log, end);
-    (void)fflush(stdout);
+    if (close_out(stdout, "the summary to stdout") != 0) {
+        rc = -1;
+    }
     if (summary != NULL && summary != stdout) {
         hstpfd_core_summary(&core, summary, cfg.iface[0] != '\0' ? "iface" : "log",
                             cfg.iface[0] != '\0' ? cfg.iface : cfg.log, end);

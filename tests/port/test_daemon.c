@@ -384,6 +384,50 @@ static void test_extreme_time_scale(void **state)
     assert_true(is(NULL, "end", "\"eof\""));
 }
 
+/* The log named again as an output is refused before it is truncated; a
+ * failed write of an output is an error (exit 1), not a silent exit 0; a
+ * FIFO is read once (the format check took its first 4 kB); a NUL inside a
+ * line costs that line only (the next one was taken for its rest). */
+static void test_files_and_lines(void **state)
+{
+    FILE *in, *out;
+    int ch, k = 0, bad = 0;
+    (void)state;
+    in = fopen(DIR "/clean.log", "rb");
+    out = fopen(DIR "/dup.log", "wb");
+    assert_non_null(in);
+    assert_non_null(out);
+    while ((ch = fgetc(in)) != EOF) { /* a copy with one more line, a NUL in it, after the 200th */
+        fputc(ch, out);
+        k += ch == '\n';
+        if (k == 200 && !bad) {
+            fputs("(1700000000.1", out);
+            fputc('\0', out);
+            fputs("9) vcan0 100#00\n", out);
+            bad = 1;
+        }
+    }
+    fclose(in);
+    fclose(out);
+    assert_int_equal(run("--log " DIR "/dup.log " MODELS " --frames-out " DIR "/dup.log > /dev/null 2>&1"), 2);
+    assert_int_equal(run("--log " DIR "/dup.log " MODELS " --summary " DIR "/dup.json > /dev/null"), 0);
+    read_file(DIR "/dup.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "bad_lines"), 1); /* the log was not truncated, and one line is bad */
+    assert_int_equal((int)num("frames", "total"), 12000);
+    if (fopen("/dev/full", "w") != NULL) {
+        assert_int_equal(run("--log " DIR "/clean.log " MODELS " --out /dev/full > /dev/null 2>&1"), 1);
+    }
+    (void)remove(DIR "/fifo");
+    (void)remove(DIR "/fifo.json");
+    assert_int_equal(system("mkfifo " DIR "/fifo"), 0);
+    /* in the background, bounded: the old check blocked in fopen once the writer had gone */
+    (void)run("--log " DIR "/fifo " MODELS " --summary " DIR "/fifo.json > /dev/null 2>&1 & "
+              "cat " DIR "/clean.log > " DIR "/fifo; sleep 0; wait");
+    read_file(DIR "/fifo.json", summary, sizeof summary);
+    assert_int_equal((int)num("frames", "total"), 12000);
+    assert_int_equal((int)num("faults", "bad_lines"), 0);
+}
+
 /* Issue 12: receive stamps jittered by up to 300 ms (a loaded gateway). With
  * the fix time in the frame the steps are dated by the measurement and the
  * estimate follows the fixes as on a clean log; without it (an older
@@ -1060,6 +1104,7 @@ int main(void)
         cmocka_unit_test(test_position_beyond_range),
         cmocka_unit_test(test_stuck_fix_time),
         cmocka_unit_test(test_extreme_time_scale),
+        cmocka_unit_test(test_files_and_lines),
         cmocka_unit_test(test_clock_step_forward_short),
         cmocka_unit_test(test_stalled_sender),
         cmocka_unit_test(test_sigterm_in_predict_loop),
