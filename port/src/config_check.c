@@ -17,10 +17,15 @@ int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size)
         return -1;
     }
     hstpfd_config_filter(c, &fc);
-    rc = hstpf_config_check(&fc, NULL); /* hstpf_init's check; the core owns the workspace */
-    if (rc != HSTPF_OK) {
-        hstpfd__fail(err, err_size, "the estimator rejects the configuration: %s (%ld)", hstpf_strerror(rc), (long)rc);
-        return -1;
+    {
+        const char *field = NULL;
+        rc = hstpf_config_check(&fc, &field); /* hstpf_init's check; the core owns the workspace */
+        if (rc != HSTPF_OK) {
+            /* the library's field names are the keys' (hstpf.h's ranges are the ones that hold) */
+            hstpfd__fail(err, err_size, "the estimator rejects %s: %s (%ld)", field != NULL ? field : "the configuration",
+                         hstpf_strerror(rc), (long)rc);
+            return -1;
+        }
     }
     return 0;
 }

@@ -44,7 +44,8 @@ static int unum(const char *text, uint64_t *out)
         return -1;
     }
     errno = 0;
-    x = strtoull(text, &end, 0);
+    /* decimal ("0100" is 100, not octal 64), or hex with 0x (a seed) */
+    x = strtoull(text, &end, text[0] == '0' && (text[1] == 'x' || text[1] == 'X') ? 16 : 10);
     if (*end != '\0' || errno == ERANGE) {
         return -1;
     }

@@ -43,6 +43,9 @@ static void test_set_numbers(void **state)
     assert_int_equal(cfg.particles, 256); /* unchanged by the failures */
     assert_int_equal(hstpfd_config_set(&cfg, "seed", "0x10", err, sizeof err), 0);
     assert_true(cfg.seed == 16u);
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "0100", err, sizeof err), 0);
+    assert_int_equal(cfg.particles, 100); /* decimal, not octal 64 */
+    assert_int_equal(hstpfd_config_set(&cfg, "particles", "256", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "seed", "18446744073709551615", err, sizeof err), 0);
     assert_true(cfg.seed == UINT64_MAX);
     assert_int_equal(hstpfd_config_set(&cfg, "seed", "18446744073709551616", err, sizeof err), -1);
@@ -243,6 +246,12 @@ static void test_finish(void **state)
     assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1); /* two */
     assert_int_equal(hstpfd_config_set(&cfg, "log", "", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), 0);
+    /* a value the key's own range takes and the library's does not: the
+     * library's refusal names the key (hstpf_config_check's field) */
+    assert_int_equal(hstpfd_config_set(&cfg, "declare_threshold", "1", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1);
+    assert_non_null(strstr(err, "declare_threshold"));
+    assert_int_equal(hstpfd_config_set(&cfg, "declare_threshold", "0.99", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "iface", "averyveryveryveryverylonginterfacename", err, sizeof err),
                      -1);
 }
