@@ -57,6 +57,7 @@ typedef struct {
     uint8_t have_time;
     int64_t src0, t_first, t_now, last_src, tick_us;
     int64_t base; /* timeline = frame time + base (clock steps taken out) */
+    int64_t back_at; /* timeline time of the last backward clock step (-1: none) */
     const volatile sig_atomic_t *stop; /* loops end when set (may be NULL) */
     int64_t src_now; /* latest source time seen (stamps of --frames-out) */
     int64_t next_tx[HSTPFD_N_OUTPUTS];

@@ -826,6 +826,42 @@ static void shifted_log(const char *in, const char *out, int64_t from_us, int64_
 
 #define S_US(x) ((int64_t)(x) * INT64_C(1000000))
 
+/* Two interleaved clocks 599 s apart (below max_gap_s, 600 s): every
+ * traction frame of the first 100 s stamped 599 s later. Each back step
+ * was followed by 599 s of predict steps (598 000 of them and 300 MB of
+ * output from 80 kB of log); after a back step a forward jump is now a
+ * step of the clock too, with no steps across it. */
+static void test_clock_flapping(void **state)
+{
+    FILE *fi = fopen(DIR "/clean.log", "r"), *fo = fopen(DIR "/flap.log", "w");
+    char line[512], buf[512];
+    (void)state;
+    assert_non_null(fi);
+    assert_non_null(fo);
+    while (fgets(line, sizeof line, fi) != NULL) {
+        hstpfd_frame_t f;
+        if (hstpfd_candump_parse(line, &f, NULL, 0) != HSTPFD_CANDUMP_OK) {
+            continue;
+        }
+        if (f.t_us >= GENLOG_T0_US + S_US(100)) {
+            break;
+        }
+        if (f.id == HSTPF_FRAME_TRACTION_ID) {
+            f.t_us += S_US(599);
+        }
+        assert_true(hstpfd_candump_format(&f, "vcan0", buf, sizeof buf) > 0);
+        fputs(buf, fo);
+    }
+    fclose(fi);
+    fclose(fo);
+    assert_int_equal(run("--log " DIR "/flap.log " MODELS " --max-gap-s 600 --summary " DIR "/flap.json > /dev/null"),
+                     0);
+    read_file(DIR "/flap.json", summary, sizeof summary);
+    assert_true(is(NULL, "end", "\"eof\""));
+    assert_true(num("faults", "clock_steps_back") >= 900.0);
+    assert_true(num(NULL, "predict_steps") < 2000.0); /* about one per flap, not 599 */
+}
+
 /* One garbage line stamped 1e6 s ahead: one step forward and one back, no
  * predict steps across the jump, the run goes on. */
 static void test_clock_garbage_line(void **state)
@@ -1105,6 +1141,7 @@ int main(void)
         cmocka_unit_test(test_stuck_fix_time),
         cmocka_unit_test(test_extreme_time_scale),
         cmocka_unit_test(test_files_and_lines),
+        cmocka_unit_test(test_clock_flapping),
         cmocka_unit_test(test_clock_step_forward_short),
         cmocka_unit_test(test_stalled_sender),
         cmocka_unit_test(test_sigterm_in_predict_loop),
