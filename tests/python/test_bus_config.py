@@ -148,3 +148,14 @@ def test_bus_kwargs_reach_the_bus(clean_env, monkeypatch, log_file, tmp_path):
     assert replay.main([str(src), "--fast", "-i", "virtual", "-c", channel_name(), "-b", "250000",
                         "--bus-kwargs", "preserve_timestamps=True", "--json", str(tmp_path / "r.json")]) == 0
     assert seen == {"kwargs": {"preserve_timestamps": True}, "bitrate": 250000}
+
+
+def test_bus_error_names_the_config_file(clean_env, log_file, capsys):
+    """An interface that cannot be opened, named only in ~/.canrc: the error
+    names the file's interface and channel (an unset environment value hid
+    them: 'interface None, channel None')."""
+    src, _ = log_file
+    (clean_env / ".canrc").write_text("[default]\ninterface = nosuch\nchannel = cfgch\n")
+    assert replay.main([str(src), "--fast"]) == 4
+    err = capsys.readouterr().err
+    assert "interface nosuch, channel cfgch" in err

@@ -164,3 +164,47 @@ def test_send_all_catches_up_on_absolute_deadlines(clean_msgs):
     assert late[(due > 0.1) & (due < 0.35)].min() > 0.05  # held back by the stall (ends at 0.4 s)
     assert np.median(late[due > 0.5]) < 0.1  # on schedule again
     assert behind["over_0.1"] >= 10 and 0.2 <= behind["max"] < 0.6
+
+
+def test_error_frames_not_sent_unless_asked(clean_msgs, tmp_path, capsys):
+    """As python-can's player: a log's error frames stay off the bus unless
+    --error-frames (hstpf-record keeps them in its logs)."""
+    src = tmp_path / "err.log"
+    msgs = [m for m in clean_msgs if m.timestamp < 500.5 - 1e-9]
+    err = can.Message(timestamp=500.15, arbitration_id=0x20000080, is_extended_id=True, is_error_frame=True,
+                      data=bytes(8), channel="vcan0")
+    write_log(str(src), sorted(msgs + [err], key=lambda m: m.timestamp))
+    for flag, expect_err in (([], 0), (["--error-frames"], 1)):
+        rx_bus = can.Bus(interface="virtual", channel="hstpf-err", receive_own_messages=False)
+        try:
+            assert replay.main([str(src), "--interface", "virtual", "--channel", "hstpf-err", "--fast"] + flag) == 0
+            got = []
+            while (m := rx_bus.recv(0.2)) is not None:
+                got.append(m)
+        finally:
+            rx_bus.shutdown()
+        rep = json.loads(capsys.readouterr().out)
+        assert sum(m.is_error_frame for m in got) == expect_err
+        assert len(got) == len(msgs) + expect_err
+        assert rep.get("error_frames_skipped", 0) == 1 - expect_err
+
+
+def test_unknown_frames_keep_the_channel(clean_msgs):
+    msgs = [message(m.timestamp, m.arbitration_id, bytes(m.data), channel="can1") for m in clean_msgs[:200]]
+    out, rep = inject(msgs, {"unknown": 0.2}, {}, seed=3)
+    assert rep["totals"]["unknown"] > 0
+    assert {m.channel for m in out} == {"can1"}
+
+
+def test_csv_and_unsupported_suffix(clean_msgs, tmp_path, capsys):
+    """A .csv written from numpy times reads back (its repr was np.float64(...));
+    a suffix whose package is missing is one line and exit 6, not a traceback."""
+    src = tmp_path / "in.csv"
+    write_log(str(src), [message(np.float64(m.timestamp), m.arbitration_id, bytes(m.data)) for m in clean_msgs[:20]])
+    back = read_log(str(src))
+    assert [m.timestamp for m in back] == pytest.approx([m.timestamp for m in clean_msgs[:20]])
+    try:
+        import asammdf  # noqa: F401
+    except ImportError:
+        assert replay.main([str(src), "--no-bus", "-o", str(tmp_path / "x.mf4")]) == 6
+        assert "x.mf4" in capsys.readouterr().err

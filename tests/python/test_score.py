@@ -160,6 +160,15 @@ def test_quality_frames_coverage(sim, tmp_path):
     assert res["speed_95_coverage"] == 1.0
     assert res["position_sd_median_m"] == pytest.approx(0.75)
     assert res["health"]["ClockStepsFwd"] == 1 and res["health"]["Reacquisitions"] == 2
+    # on a live bus each EstQuality is stamped a little after its EstState: still paired
+    for m in msgs:
+        if m.arbitration_id == codec.db.get_message_by_name("EstQuality").frame_id:
+            m.timestamp += 0.00015
+    write_log(str(rec), sorted(msgs, key=lambda m: m.timestamp))
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js)]) == 0
+    live = json.loads(js.read_text())
+    assert live["quality_frames"] == res["quality_frames"]
+    assert live["position_95_coverage"] == res["position_95_coverage"]
 
 
 @pytest.mark.parametrize("dated", [True, False])

@@ -260,7 +260,8 @@ def _describe(ns: argparse.Namespace) -> str:
     # the sources load_config reads, without its check of the interface name
     for src in (can.util.load_environment_config(), can.util.load_file_config()):
         for k in ("interface", "channel"):
-            cfg.setdefault(k, src.get(k))
+            if src.get(k) is not None:  # an unset source must not hide the next one's value
+                cfg.setdefault(k, src.get(k))
     return f"interface {cfg.get('interface')!s}, channel {cfg.get('channel')!s}"
 
 
@@ -384,5 +385,7 @@ def save_log(path: str, msgs, channel: str) -> int:
         if path != "-":
             Path(path).parent.mkdir(parents=True, exist_ok=True)
         return write_log(path, msgs, channel)
-    except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
+    except (OSError, ValueError, NotImplementedError) as exc:
+        # ValueError: a suffix python-can cannot write; NotImplementedError: one
+        # whose optional package is missing (.mf4 without asammdf)
         raise output_error(path, exc) from exc

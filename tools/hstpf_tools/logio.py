@@ -8,8 +8,10 @@ from .frames import FIX_TIME_WRAP_MS, FrameCodec
 
 
 def message(t: float, frame_id: int, data: bytes, channel: str = "vcan0") -> can.Message:
-    return can.Message(timestamp=t, arbitration_id=frame_id, data=data, is_extended_id=False, channel=channel,
-                       is_rx=False)
+    # a plain float: python-can's CSV writer stores repr(timestamp), and a
+    # numpy float's repr ("np.float64(...)") could not be read back
+    return can.Message(timestamp=float(t), arbitration_id=frame_id, data=data, is_extended_id=False,
+                       channel=channel, is_rx=False)
 
 
 def log_writer(path: str, channel: str = "vcan0"):

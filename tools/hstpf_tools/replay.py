@@ -135,7 +135,7 @@ def inject(
             order += 1
         elif kind == "unknown":
             x = can.Message(timestamp=m.timestamp + 0.0005, arbitration_id=unknown_id, data=bytes(8),
-                            is_extended_id=False, is_rx=False)
+                            is_extended_id=False, is_rx=False, channel=m.channel)
             out.append((x.timestamp, order, x))
             order += 1
     out.sort(key=lambda e: (e[0], e[1]))
@@ -226,6 +226,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="send on the bus (default: yes, unless -o is given without any bus option)")
     p.add_argument("--speed", type=float, default=1.0, help="speed-up factor (1 = real time)")
     p.add_argument("--fast", action="store_true", help="no timing: send back to back")
+    p.add_argument("--error-frames", action="store_true",
+                   help="also send the log's error frames (not sent by default, as python-can's player)")
     p.add_argument("-o", "--out", help="also write the faulted stream to this log ('-': candump text on stdout)")
     p.add_argument("--seed", type=int, default=1, help="fault RNG seed (1)")
     p.add_argument("--ids", type=_ids, help="IDs subject to faults, e.g. 0x100,0x101 (default all)")
@@ -261,13 +263,18 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
     if a.out:
         try:
             write_log(a.out, msgs)
-        except (OSError, ValueError) as exc:  # ValueError: a suffix python-can cannot write
+        except (OSError, ValueError, NotImplementedError) as exc:  # a suffix python-can cannot write
             raise cli.output_error(a.out, exc) from exc
     code, failure = cli.EXIT_OK, None
     if use_bus:
         own = bus is None
         if own:
             bus = cli.open_bus(a)
+        if not a.error_frames:  # as python-can's player: a log's error frames are not sent
+            sent_msgs = [m for m in msgs if not m.is_error_frame]
+            if len(sent_msgs) != len(msgs):
+                report["error_frames_skipped"] = len(msgs) - len(sent_msgs)
+            msgs = sent_msgs
         span = msgs[-1].timestamp - msgs[0].timestamp if msgs else 0.0
         progress = cli.Progress("hstpf-replay", a.progress, len(msgs), span)
         t = time.perf_counter()

@@ -203,6 +203,10 @@ def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
     return out
 
 
+# an EstQuality this long after an EstState belongs to it (both go out together; the
+# state period is 1 s by default)
+QUALITY_PAIR_S = 0.05
+
 def metrics(series, truth) -> dict:
     th_true: Theta = truth["theta"]
     tt = truth["time_s"]
@@ -216,9 +220,15 @@ def metrics(series, truth) -> dict:
         ev = spd - np.interp(t, tt, truth["speed_mps"])
         res.update(position_rms_m=float(np.sqrt(np.mean(ep**2))), speed_rms_mps=float(np.sqrt(np.mean(ev**2))),
                    state_frames=len(st))
-        # EstQuality goes out with each EstState: the 95 % intervals' coverage
-        qt = {t: s for t, s in series[EST_QUALITY] if s["QualValid"] >= 0.5}
-        both = [(i, qt[ti]) for i, ti in enumerate(t) if ti in qt]
+        # EstQuality goes out with each EstState: the 95 % intervals' coverage.
+        # Each is paired with the state just before it (offline the same
+        # stamp; on a live bus a little later, which an exact match missed)
+        pair: dict = {}
+        for tq, q in series[EST_QUALITY]:
+            i = int(np.searchsorted(t, tq, side="right")) - 1
+            if q["QualValid"] >= 0.5 and i >= 0 and tq - t[i] <= QUALITY_PAIR_S and i not in pair:
+                pair[i] = q
+        both = sorted(pair.items())
         if both:
             idx = np.array([i for i, _ in both])
             psd = np.array([q["PositionSd"] for _, q in both])
