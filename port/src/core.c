@@ -163,11 +163,18 @@ static int64_t frame_time(const hstpfd_core_t *c, int64_t src)
  * such a log made 598 000 predict steps and 300 MB of output. */
 #define CLOCK_FLAP_US INT64_C(10000000)
 
-/* Timeline time t (frame time + base) is a forward step of the source clock. */
+/* Just after a backward step of the source clock. */
+static int flapping(const hstpfd_core_t *c)
+{
+    return c->back_at >= 0 && c->t_now - c->back_at < CLOCK_FLAP_US;
+}
+
+/* Timeline time t (frame time + base) is a forward step of the source clock:
+ * more than max_gap_s ahead of the latest time, or 1 s just after a
+ * backward step. */
 static int forward_step(const hstpfd_core_t *c, int64_t t)
 {
-    const int flapping = c->back_at >= 0 && c->t_now - c->back_at < CLOCK_FLAP_US;
-    return t > c->t_now + (flapping ? CLOCK_BACK_US : c->sched.gap_us);
+    return t > c->t_now + (flapping(c) ? CLOCK_BACK_US : c->sched.gap_us);
 }
 
 /* Source time -> the daemon's timeline, which never goes back and never
@@ -187,9 +194,7 @@ static void set_time(hstpfd_core_t *c, int64_t src)
         c->back_at = t;
         hstpfd_sched_clock_step(&c->sched, t, -1);
     } else if (forward_step(c, t)) {
-        const int64_t t2 = c->t_now + CLOCK_BACK_US + (c->back_at >= 0 && c->t_now - c->back_at < CLOCK_FLAP_US
-                                                           ? 0
-                                                           : c->sched.gap_us);
+        const int64_t t2 = c->t_now + CLOCK_BACK_US + (flapping(c) ? 0 : c->sched.gap_us);
         c->base -= t - t2;
         t = c->t_now = t2;
         hstpfd_sched_clock_step(&c->sched, t, 1);

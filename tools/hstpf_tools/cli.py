@@ -376,6 +376,11 @@ def load_log(path: str):
         raise input_error(path, exc) from exc
 
 
+# What writing a log through python-can raises for a bad output path: OSError;
+# ValueError, a suffix it cannot write; NotImplementedError, one whose
+# optional package is missing (.mf4 without asammdf)
+LOG_WRITE_ERRORS = (OSError, ValueError, NotImplementedError)
+
 def save_log(path: str, msgs, channel: str) -> int:
     """write_log(path, msgs, channel) into a folder made if missing ('-':
     stdout), with its failure as CliError(6). Returns the frame count."""
@@ -385,7 +390,5 @@ def save_log(path: str, msgs, channel: str) -> int:
         if path != "-":
             Path(path).parent.mkdir(parents=True, exist_ok=True)
         return write_log(path, msgs, channel)
-    except (OSError, ValueError, NotImplementedError) as exc:
-        # ValueError: a suffix python-can cannot write; NotImplementedError: one
-        # whose optional package is missing (.mf4 without asammdf)
+    except LOG_WRITE_ERRORS as exc:
         raise output_error(path, exc) from exc

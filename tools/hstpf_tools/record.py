@@ -117,7 +117,7 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
             progress = cli.Progress("hstpf-record", a.progress)
             try:
                 res = record(bus, a.out, a.duration, a.quiet, a.first_timeout, a.max_frames, a.ids, stop, progress)
-            except (OSError, ValueError, NotImplementedError) as exc:  # a suffix python-can cannot write
+            except cli.LOG_WRITE_ERRORS as exc:
                 raise cli.output_error(a.out, exc) from exc
     finally:
         if own:

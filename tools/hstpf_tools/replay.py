@@ -263,7 +263,7 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
     if a.out:
         try:
             write_log(a.out, msgs)
-        except (OSError, ValueError, NotImplementedError) as exc:  # a suffix python-can cannot write
+        except cli.LOG_WRITE_ERRORS as exc:
             raise cli.output_error(a.out, exc) from exc
     code, failure = cli.EXIT_OK, None
     if use_bus:
