@@ -14,8 +14,8 @@ mc=build/tools/montecarlo/hstpf-mc
 out=out/results
 mkdir -p "$out" docs/img
 # One setting for every case and truth; only the noise model is the case's.
-# Library defaults otherwise: engine auto (Kalman for Gaussian noise,
-# particles for Gamma), M = 100, declaration at q > 0.99 held 30 s. The two
+# Library defaults otherwise: engine auto (Kalman for Gaussian noise, the
+# grid for any other), M = 100, declaration at q > 0.99 held 30 s. The two
 # below act on the particle engine only.
 settings=(--e-blur 0.2 --rough 0.7)
 seeds=${HSTPF_SEEDS:-100}

@@ -70,3 +70,38 @@ def test_oracle_on_the_table(mc, tmp_path):
     assert lines[-1].startswith("oracle, paired with the declaration")
     for run in json.loads((tmp_path / "o.json").read_text())["results"][0]["runs"]:
         assert run["oracle_sep"] == -1 or 0 <= run["oracle_sep"] <= 301
+
+
+def test_models_custom_bank(mc, tmp_path):
+    """--models: a bank of Table 1 names (any case) and custom rows, each a
+    truth in turn; the custom row is simulated with its own coefficients,
+    so its own row fits the data and leads the bank at the end."""
+    out = tmp_path / "m.json"
+    bank = "CRH1,crh3,MyEMU:1.10:0.0090:0.000150"
+    subprocess.run([mc, "--scenario", "all17", "--models", bank, "--seeds", "2", "--duration", "900",
+                    "--threads", "1", "--json", str(out)], capture_output=True, text=True, check=True)
+    res = json.loads(out.read_text())["results"]
+    assert [r["truth"] for r in res] == ["CRH1", "CRH3", "MyEMU"]
+    for run in res[2]["runs"]:
+        assert not run["false_decl"]
+        assert run["q_true_end"] > 0.5
+
+
+@pytest.mark.parametrize("args, says", [
+    (["--scenario", "paper1-particle"], "--engine particle"),
+    (["--scenario", "nosuch"], "no scenario 'nosuch'"),
+    (["--scenario", "paper1", "--bogus", "1"], "unknown option '--bogus'"),
+    (["--scenario", "paper1", "--engine", "fast"], "--engine: 'fast'"),
+    (["--scenario", "paper1", "--truth", "SS8"], "one truth, CRH3"),
+    (["--scenario", "all17", "--truth", "NoSuch"], "no such row"),
+    (["--scenario", "all17", "--models", "CRH1,Mine:1:0.01"], "'Mine:1:0.01' must be name:c0:c1:c2"),
+    (["--scenario", "all17", "--models", "CRH1,Nope"], "'Nope' is not a Table 1 name"),
+    (["--scenario", "all17", "--models", "CRH1,X:1:2:0"], "must lie in"),
+    (["--scenario", "all17", "--models", "CRH1,crh1"], "twice"),
+    (["--scenario", "all17", "--models", "CRH1,"], "empty"),
+])
+def test_bad_command_lines_say_why(mc, args, says):
+    """A bad command line exits 2 with its reason on stderr, not the bare usage."""
+    r = subprocess.run([mc, *args, "--seeds", "1"], capture_output=True, text=True)
+    assert r.returncode == 2
+    assert says in r.stderr and r.stderr.startswith("hstpf-mc: ")

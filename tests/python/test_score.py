@@ -341,3 +341,26 @@ def test_est_time_after_an_output_silence(sim, tmp_path):
     res = json.loads(js.read_text())
     assert res["state_frames_dated"] >= res["state_frames"] > 300
     assert res["position_rms_m"] == pytest.approx(1.0, abs=0.006)
+
+
+@pytest.mark.parametrize("declared, correct", [((1.10, 0.0090, 0.000150), True), ((1.12, 0.0090, 0.000150), False)])
+def test_custom_declared_row_judged_by_its_theta(tmp_path, declared, correct):
+    """Custom rows all go out as DeclaredType 254 without a name: the declared
+    one is the truth's when its published theta is the truth's (to the
+    frames' resolution), not merely because both are "custom"."""
+    log = tmp_path / "c.log"
+    assert simulate.main(["-o", str(log), "--duration", "60", "--seed", "1", "--coeffs", "1.10,0.0090,0.000150"]) == 0
+    codec = FrameCodec()
+    msgs = []
+    for k in range(0, 60):
+        fid, data = codec.encode("EstType", {"TypeStatus": 1 if k >= 30 else 0, "DeclaredType": 254 if k >= 30 else 255,
+                                             "DeclaredWeight": 0.99, "LeaderType": 254, "LeaderWeight": 0.99})
+        msgs.append(message(float(k), fid, data))
+        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": declared[0], "C1": declared[1], "C2": declared[2]})
+        msgs.append(message(float(k), fid, data))
+    rec = tmp_path / "rec.log"
+    write_log(str(rec), msgs)
+    js = tmp_path / "m.json"
+    assert score.main([str(rec), "--truth", str(tmp_path / "c_truth.csv"), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["declared_type"] == "custom" and res["declared_correct"] is correct

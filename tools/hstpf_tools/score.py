@@ -29,8 +29,8 @@ import numpy as np
 
 from . import cli, e2e, runconfig
 from .frames import (BAND_SPEEDS_KMH, EST_BAND, EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIT_NAMES,
-                     FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_NONE,
-                     FrameCodec, type_name)
+                     FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_CUSTOM,
+                     TYPE_NONE, FrameCodec, type_name)
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
@@ -206,6 +206,21 @@ def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
 # an EstQuality this long after an EstState belongs to it (both go out together; the
 # state period is 1 s by default)
 QUALITY_PAIR_S = 0.05
+# EstTheta's resolution (the DBC's factors of C0, C1, C2)
+THETA_LSB = (0.001, 1e-6, 2e-8)
+
+
+def custom_is_truth(series, t_type: float, th_true: Theta) -> bool:
+    """Every custom row goes out as DeclaredType 254, without its name; a
+    declared row publishes its own theta, so the declared custom row is the
+    truth's when the EstTheta beside the last EstType is the truth's theta
+    to the frame's resolution."""
+    thf = [s for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5 and t <= t_type + QUALITY_PAIR_S]
+    if not thf:
+        return False
+    s = thf[-1]
+    return all(abs(s[k] - v) <= lsb for k, v, lsb in zip(("C0", "C1", "C2"), (th_true.c0, th_true.c1, th_true.c2),
+                                                           THETA_LSB))
 
 def metrics(series, truth) -> dict:
     th_true: Theta = truth["theta"]
@@ -255,6 +270,8 @@ def metrics(series, truth) -> dict:
                 decision = t
     res["declared_type"] = declared
     res["declared_correct"] = declared == th_true.name
+    if declared is not None and last == TYPE_CUSTOM:
+        res["declared_correct"] = custom_is_truth(series, ty[-1][0], th_true)
     res["decision_time_s"] = decision
     thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
     if thf:

@@ -6,8 +6,10 @@
  * print their own table (docs/results.md). */
 #define _POSIX_C_SOURCE 200112L
 
+#include <ctype.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +20,10 @@
 #include "hstpf_sim.h"
 
 #define MAXM HSTPF_MAX_MODELS
+#define NAME_MAX_LEN 31 /* a custom row's name, as hstpfd's models key */
+
+/* all17 scenarios put every row of Table 1 in the bank */
+typedef char mc_table_fits_bank[HSTPF_N_TRAIN_TYPES <= MAXM ? 1 : -1];
 
 typedef struct {
     const char *name;
@@ -1294,6 +1300,8 @@ static void usage_to(FILE *out)
     fprintf(out,
             "usage: hstpf-mc --scenario NAME [--seeds N [--first-seed K]] [--threads N] [--duration S]\n"
             "  [--truth NAME] [--json FILE|-] [--trace FILE [--trace-seed N]] [--progress] [--version]\n"
+            "  [--models LIST]  (the bank, each row a truth in turn: Table 1 names and custom rows name:c0:c1:c2,\n"
+            "                   comma-separated, as hstpfd's models key)\n"
             "  filter settings: [--engine auto|particle|kalman|grid] [--particles M]\n"
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
@@ -1312,9 +1320,109 @@ static void usage_to(FILE *out)
     fprintf(out, "\n");
 }
 
-static void usage(void)
+/* A bad command line: the reason on stderr; returns the exit status 2. */
+static int bad(const char *fmt, ...)
 {
-    usage_to(stderr);
+    va_list ap;
+    fprintf(stderr, "hstpf-mc: ");
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fprintf(stderr, " (hstpf-mc --help prints the usage)\n");
+    return 2;
+}
+
+/* Names compare without case: --truth crh3 is CRH3 (as hstpf-simulate). */
+static int same_name(const char *a, const char *b)
+{
+    if (a == NULL || b == NULL) {
+        return 0;
+    }
+    for (; *a && *b; ++a, ++b) {
+        if (tolower((unsigned char)*a) != tolower((unsigned char)*b)) {
+            return 0;
+        }
+    }
+    return *a == *b;
+}
+
+/* --models: a comma-separated bank of Table 1 names and custom rows
+ * name:c0:c1:c2 (hstpfd's models key); names kept in names. Returns the
+ * number of rows, or -1 with the reason printed. */
+static int parse_models(const char *list, hstpf_theta_t *models, char (*names)[NAME_MAX_LEN + 1])
+{
+    int n = 0;
+    const char *p = list;
+    while (*p) {
+        const char *end = strchr(p, ',');
+        const size_t len = end ? (size_t)(end - p) : strlen(p);
+        char item[160];
+        char *colon;
+        int k;
+        if (n == MAXM) {
+            (void)bad("--models: more than %d rows", MAXM);
+            return -1;
+        }
+        if (len == 0 || len >= sizeof item) {
+            (void)bad("--models: empty or over-long entry in '%s'", list);
+            return -1;
+        }
+        memcpy(item, p, len);
+        item[len] = '\0';
+        colon = strchr(item, ':');
+        if (colon == NULL) {
+            for (k = 0; k < HSTPF_N_TRAIN_TYPES && !same_name(hstpf_train_types[k].name, item); ++k) {
+            }
+            if (k == HSTPF_N_TRAIN_TYPES) {
+                (void)bad("--models: '%s' is not a Table 1 name; a custom row is name:c0:c1:c2", item);
+            return -1;
+            }
+            models[n] = hstpf_train_types[k];
+        } else {
+            char *e1, *e2 = item, *e3 = item;
+            const size_t nl = (size_t)(colon - item);
+            const double c0 = strtod(colon + 1, &e1);
+            const double c1 = *e1 == ':' ? strtod(e1 + 1, &e2) : 0.0;
+            const double c2 = *e1 == ':' && *e2 == ':' ? strtod(e2 + 1, &e3) : 0.0;
+            if (*e1 != ':' || *e2 != ':' || *e3 != '\0' || e3 == e2 + 1 || nl == 0 || nl > NAME_MAX_LEN) {
+                (void)bad("--models: custom entry '%s' must be name:c0:c1:c2, a name of 1-%d characters", item,
+                           NAME_MAX_LEN);
+            return -1;
+            }
+            if (!(c0 >= 0.0 && c0 <= HSTPF_C0_MAX && c1 >= 0.0 && c1 <= HSTPF_C1_MAX && c2 >= 0.0 &&
+                  c2 <= HSTPF_C2_MAX)) {
+                (void)bad("--models: '%s': c0, c1, c2 must lie in [0, %g], [0, %g], [0, %g]", item, HSTPF_C0_MAX,
+                           HSTPF_C1_MAX, HSTPF_C2_MAX);
+            return -1;
+            }
+            memcpy(names[n], item, nl);
+            names[n][nl] = '\0';
+            models[n].name = names[n];
+            models[n].c0 = c0;
+            models[n].c1 = c1;
+            models[n].c2 = c2;
+        }
+        for (k = 0; k < n; ++k) {
+            if (same_name(models[k].name, models[n].name)) {
+                (void)bad("--models: '%s' twice", models[n].name);
+            return -1;
+            }
+        }
+        ++n;
+        p += len;
+        if (*p == ',') {
+            ++p;
+            if (*p == '\0') {
+                (void)bad("--models: empty entry at the end of '%s'", list);
+            return -1;
+            }
+        }
+    }
+    if (n == 0) {
+        (void)bad("--models: no rows");
+        return -1;
+    }
+    return n;
 }
 
 int main(int argc, char **argv)
@@ -1326,7 +1434,8 @@ int main(int argc, char **argv)
     work_t w;
     hstpf_theta_t models[MAXM];
     int truths[MAXM];
-    const char *scen = NULL, *json = NULL, *truth_name = NULL;
+    static char custom[MAXM][NAME_MAX_LEN + 1];
+    const char *scen = NULL, *json = NULL, *truth_name = NULL, *models_list = NULL;
     int seeds = 100, threads = 2, i, j, n_models;
     double duration = -1.0;
     pthread_t th[16];
@@ -1377,12 +1486,13 @@ int main(int argc, char **argv)
             continue;
         }
         if (v == NULL) {
-            usage();
-            return 2;
+            return bad("'%s': an unknown option, or one without its value", a);
         }
         ++i;
         if (!strcmp(a, "--scenario")) {
             scen = v;
+        } else if (!strcmp(a, "--models")) {
+            models_list = v;
         } else if (!strcmp(a, "--seeds")) {
             seeds = atoi(v);
         } else if (!strcmp(a, "--refine-prior")) {
@@ -1415,8 +1525,7 @@ int main(int argc, char **argv)
             } else if (!strcmp(v, "grid")) {
                 st.base.engine = HSTPF_ENGINE_GRID;
             } else {
-                usage();
-                return 2;
+                return bad("--engine: '%s' is not auto, particle, kalman or grid", v);
             }
         } else if (!strcmp(a, "--particles")) {
             st.base.n_particles = (uint16_t)atoi(v);
@@ -1449,8 +1558,7 @@ int main(int argc, char **argv)
             st.edge_soft = atof(v);
             st.soft_set = 1;
         } else {
-            usage();
-            return 2;
+            return bad("unknown option '%s'", a);
         }
     }
     for (i = 0; scen && i < (int)(sizeof scenarios / sizeof scenarios[0]); ++i) {
@@ -1458,16 +1566,26 @@ int main(int argc, char **argv)
             break;
         }
     }
-    if (scen == NULL || i == (int)(sizeof scenarios / sizeof scenarios[0]) || seeds < 1 || w.first_seed < 1 ||
-        threads < 1 || threads > 16) {
-        usage();
-        return 2;
+    if (scen == NULL) {
+        return bad("no --scenario");
+    }
+    if (i == (int)(sizeof scenarios / sizeof scenarios[0])) {
+        return bad("no scenario '%s'%s", scen,
+                   strstr(scen, "-particle") ? " (a scenario on the particle engine: --engine particle)" : "");
+    }
+    if (seeds < 1 || w.first_seed < 1 || threads < 1 || threads > 16) {
+        return bad("--seeds and --first-seed must be at least 1, --threads 1 to 16");
     }
     sc = scenarios[i];
     if (duration > 0.0) {
         sc.duration_s = duration;
     }
-    if (sc.all17) {
+    if (models_list) {
+        n_models = parse_models(models_list, models, custom);
+        if (n_models < 0) {
+            return 2;
+        }
+    } else if (sc.all17) {
         n_models = HSTPF_N_TRAIN_TYPES;
         for (j = 0; j < n_models; ++j) {
             models[j] = hstpf_train_types[j];
@@ -1480,16 +1598,19 @@ int main(int argc, char **argv)
     }
     w.n_jobs = 0;
     for (j = 0; j < n_models; ++j) {
-        /* the paper's cases have one truth, CRH3; the 17-type study all */
-        if ((!sc.all17 && strcmp(models[j].name, "CRH3") != 0) ||
-            (truth_name && strcmp(models[j].name, truth_name) != 0)) {
+        /* the paper's cases have one truth, CRH3; the 17-type study and a
+         * bank of --models every row */
+        if ((!sc.all17 && !models_list && strcmp(models[j].name, "CRH3") != 0) ||
+            (truth_name && !same_name(models[j].name, truth_name))) {
             continue;
         }
         truths[w.n_jobs++] = j;
     }
     if (w.n_jobs == 0) {
-        fprintf(stderr, "no such truth in the model set\n");
-        return 2;
+        return bad(!sc.all17 && !models_list ? "--truth %s: the paper's scenarios have one truth, CRH3 (with --models "
+                                               "every row of the bank is a truth)"
+                                             : "--truth %s: no such row in the bank",
+                   truth_name);
     }
     w.sc = &sc;
     w.st = &st;
