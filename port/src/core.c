@@ -292,10 +292,14 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
     switch (r.kind) {
     case HSTPFD_RX_POSITION: {
         /* consecutive fixes: the previous accepted position frame was a fix and
-         * the alive counter moved on by 1..max_delta since (also across a
-         * stale gap: a receive clock step leaves the counter in sequence) */
+         * the alive counter moved on by 1..max_delta since; also across a
+         * stale gap (2: a receive clock step or a stalled sender leaves the
+         * counter in sequence), where a fix older than the last is not the
+         * next one (sched.c, fix_time) */
         const unsigned d_cnt = (r.counter + 15u - c->pos_last_counter) % 15u;
-        const int in_seq = c->pos_prev_fix && r.accepted && d_cnt >= 1u && d_cnt <= c->cfg->e2e_max_delta;
+        const int in_seq = c->pos_prev_fix && r.accepted && d_cnt >= 1u && d_cnt <= c->cfg->e2e_max_delta
+                               ? (r.e2e == HSTPF_E2E_OK_INITIAL ? 2 : 1)
+                               : 0;
         ++c->n.position;
         if (r.accepted || r.e2e == HSTPF_E2E_COUNTER_JUMP) {
             c->pos_prev_fix = r.valid;

@@ -305,7 +305,15 @@ static int64_t fix_time(hstpfd_sched_t *s, int64_t t_rx, int32_t fix_ms, int in_
         int64_t d = (int64_t)((fix_ms - s->fix_ms_last + HSTPFD_SCHED_FIX_WRAP_MS) % HSTPFD_SCHED_FIX_WRAP_MS) * 1000;
         int64_t off;
         if (in_sequence && d > FIX_WRAP_US / 2) {
-            d -= FIX_WRAP_US; /* older than the last fix */
+            /* older than the last fix: a sender that reordered, within one
+             * unbroken sequence; across a stale gap, lost frames whose
+             * counter landed in sequence again (76 frames: every fix dated a
+             * wrap early and dropped as late), so the receive times count */
+            if (in_sequence == 2) {
+                in_sequence = 0;
+            } else {
+                d -= FIX_WRAP_US;
+            }
         }
         if (in_sequence && (d > FIX_SEQ_MAX_US || d < -FIX_SEQ_MAX_US)) {
             in_sequence = 0; /* more than a few cycles apart: not the next fix after all */

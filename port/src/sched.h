@@ -165,9 +165,11 @@ void hstpfd_sched_position(hstpfd_sched_t *s, int64_t t_us, double position_m);
 #define HSTPFD_SCHED_FIX_WRAP_MS 8192
 #define HSTPFD_NO_FIX_TIME (-1)
 /* A valid position sample received at t_us with its fix time fix_ms (0 ..
- * wrap-1, or HSTPFD_NO_FIX_TIME: dated by t_us). in_sequence: the previous
- * fix came in the same unbroken E2E sequence just before this frame (so
- * the fix times' difference is below the wrap). */
+ * wrap-1, or HSTPFD_NO_FIX_TIME: dated by t_us). in_sequence: 1 when the
+ * previous fix came in the same unbroken E2E sequence just before this
+ * frame (so the fix times' difference is below the wrap), 2 when the
+ * counter is in sequence across a stale gap (the same, but a fix older than
+ * the last is then dated by the receive times), 0 otherwise. */
 void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m, int32_t fix_ms, int in_sequence);
 
 #endif

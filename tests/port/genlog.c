@@ -95,7 +95,8 @@ int genlog(const genlog_t *g)
             struct hstpf_can_traction_t tr;
             uint8_t d[8];
             const double y = cur.y + (next.y - cur.y) * j / 10.0;
-            const int silent = g->faults && k >= SILENCE_FROM && k < SILENCE_TO;
+            const int lost = g->n_lost > 0 && k * 10 + j >= g->lost_from_frame && k * 10 + j < g->lost_from_frame + g->n_lost;
+            const int silent = (g->faults && k >= SILENCE_FROM && k < SILENCE_TO) || lost;
 
             (void)hstpf_can_position_init(&p);
             p.pos_valid = 1;

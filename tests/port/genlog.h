@@ -20,6 +20,7 @@ typedef struct {
     int jitter_ms;   /* receive stamps delayed by a pseudo-random 0..jitter_ms (a loaded gateway; order kept) */
     int over_from_s, over_to_s; /* positions of [from, to) s sent as the signal's largest, 1.7e8 m */
     int stuck_fix_from_s;       /* > 0: the fix time stops moving from this second on */
+    int lost_from_frame, n_lost; /* n_lost > 0: position frames lost from this frame on (10 a second) */
 } genlog_t;
 
 /* Returns 0, or -1 if the file cannot be written. */

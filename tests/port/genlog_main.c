@@ -10,7 +10,7 @@
 
 int main(int argc, char **argv)
 {
-    genlog_t g = {NULL, 600, 0, 1, 1, 500.0, 0, 0, 0, 0, 0};
+    genlog_t g = {NULL, 600, 0, 1, 1, 500.0, 0, 0, 0, 0, 0, 0, 0};
     int i;
     for (i = 1; i < argc; ++i) {
         if (strcmp(argv[i], "--faults") == 0) {

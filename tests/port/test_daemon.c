@@ -89,7 +89,7 @@ static int is(const char *section, const char *key, const char *text)
 
 static void test_clean_run(void **state)
 {
-    const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T, 0, 0, 0, 0, 0};
+    const genlog_t g = {DIR "/clean.log", 600, 0, 1, 1, MASS_T, 0, 0, 0, 0, 0, 0, 0};
     char line[4096];
     FILE *fp;
     int n = 0;
@@ -142,7 +142,7 @@ static void test_clean_run(void **state)
 
 static void test_faults_counted(void **state)
 {
-    const genlog_t g = {DIR "/faults.log", 600, 1, 1, 1, MASS_T, 0, 0, 0, 0, 0};
+    const genlog_t g = {DIR "/faults.log", 600, 1, 1, 1, MASS_T, 0, 0, 0, 0, 0, 0, 0};
     (void)state;
     generate(&g);
     assert_int_equal(run("--log " DIR "/faults.log " MODELS " --summary " DIR "/faults.json > /dev/null"), 0);
@@ -176,7 +176,7 @@ static void test_deterministic_and_time_scale(void **state)
 {
     static char again[16384];
     double t1;
-    const genlog_t g = {DIR "/fast.log", 600, 0, 10, 1, MASS_T, 0, 0, 0, 0, 0};
+    const genlog_t g = {DIR "/fast.log", 600, 0, 10, 1, MASS_T, 0, 0, 0, 0, 0, 0, 0};
     (void)state;
     assert_int_equal(run("--log " DIR "/clean.log " MODELS " --summary " DIR "/again.json > /dev/null"), 0);
     read_file(DIR "/clean.json", summary, sizeof summary);
@@ -319,7 +319,7 @@ static stream_stats_t stream_stats(const char *path)
  * (a review's harness, twenty-second session). */
 static void test_position_beyond_range(void **state)
 {
-    genlog_t g = {DIR "/over.log", 300, 0, 1, 1, MASS_T, 0, 0, 150, 160, 0};
+    genlog_t g = {DIR "/over.log", 300, 0, 1, 1, MASS_T, 0, 0, 150, 160, 0, 0, 0};
     static char line[8192];
     double last = -1.0;
     int in_window = 0;
@@ -355,7 +355,7 @@ static void test_position_beyond_range(void **state)
  * fix time the position is stale, and the estimator predicts on. */
 static void test_stuck_fix_time(void **state)
 {
-    genlog_t g = {DIR "/stuck.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 150};
+    genlog_t g = {DIR "/stuck.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 150, 0, 0};
     (void)state;
     generate(&g);
     assert_int_equal(run("--log " DIR "/stuck.log " MODELS " --summary " DIR "/stuck.json > /dev/null"), 0);
@@ -363,6 +363,25 @@ static void test_stuck_fix_time(void **state)
     assert_int_equal((int)num("faults", "position_stale"), 1);
     assert_true(num(NULL, "steps") >= 295.0);    /* the steps go on to the end */
     assert_true(num(NULL, "predict_steps") >= 140.0);
+}
+
+/* 76 position frames lost at 200 s (7.6 s): the alive counter lands back
+ * in sequence (76 = 5 x 15 + 1) and the fix time 592 ms behind the last
+ * modulo the wrap. Taken as a fix older than the last, every fix after the
+ * gap was dated 8.192 s early: 41 dropped as late, then a fix clock step and
+ * a re-acquisition. Across a stale gap the receive times count the wraps. */
+static void test_outage_counter_in_sequence(void **state)
+{
+    genlog_t g = {DIR "/gap76.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 0, 2000, 76};
+    (void)state;
+    generate(&g);
+    assert_int_equal(run("--log " DIR "/gap76.log " MODELS " --summary " DIR "/gap76.json > /dev/null"), 0);
+    read_file(DIR "/gap76.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "position_stale"), 1);
+    assert_true(num("faults", "late_position") <= 1.0);
+    assert_int_equal((int)num("scheduler", "fix_clock_steps"), 0);
+    assert_int_equal((int)num("scheduler", "reacquire"), 0);
+    assert_true(is(NULL, "valid", "true"));
 }
 
 /* Source times far apart under --time-scale, and a time scale near its
@@ -434,8 +453,8 @@ static void test_files_and_lines(void **state)
  * sender) the same jitter becomes position error at 100 m/s. */
 static void test_fix_time_under_jitter(void **state)
 {
-    const genlog_t with = {DIR "/jit.log", 600, 0, 1, 1, MASS_T, 0, 300, 0, 0, 0};
-    const genlog_t without = {DIR "/jit_nofix.log", 600, 0, 1, 1, MASS_T, 1, 300, 0, 0, 0};
+    const genlog_t with = {DIR "/jit.log", 600, 0, 1, 1, MASS_T, 0, 300, 0, 0, 0, 0, 0};
+    const genlog_t without = {DIR "/jit_nofix.log", 600, 0, 1, 1, MASS_T, 1, 300, 0, 0, 0, 0, 0};
     stream_stats_t a, b, clean;
     (void)state;
     generate(&with);
@@ -1139,6 +1158,7 @@ int main(void)
         cmocka_unit_test(test_clock_step_back),
         cmocka_unit_test(test_position_beyond_range),
         cmocka_unit_test(test_stuck_fix_time),
+        cmocka_unit_test(test_outage_counter_in_sequence),
         cmocka_unit_test(test_extreme_time_scale),
         cmocka_unit_test(test_files_and_lines),
         cmocka_unit_test(test_clock_flapping),

@@ -52,7 +52,7 @@ static const char *slurp(const char *path)
 
 static int setup(void **state)
 {
-    const genlog_t g = {LOG, 60, 0, 1, 3, 500.0, 0, 0, 0, 0, 0};
+    const genlog_t g = {LOG, 60, 0, 1, 3, 500.0, 0, 0, 0, 0, 0, 0, 0};
     (void)state;
     return genlog(&g);
 }
