@@ -132,6 +132,9 @@ static void emit(hstpfd_sched_t *s, int64_t t_end, int has_pos, double y, int re
     st.trac_stale = s->trac_stale;
     st.no_traction = (uint8_t)!s->have_u;
     s->t_step = t_end;
+    if (has_pos) {
+        s->t_fix_step = t_end;
+    }
     s->have_step = 1;
     ++s->n.steps;
     if (!has_pos) {
@@ -393,7 +396,10 @@ void hstpfd_sched_position_at(hstpfd_sched_t *s, int64_t t_us, double position_m
         s->t_due = t_us + s->step_us; /* fell behind the grid: start it again */
     }
     s->pos_stale = 0;
-    if (s->restart_next || gap > s->gap_us) {
+    /* the gap is the positions' own: the predict steps of an outage move
+     * t_step on, and a 700 s outage was predicted across to a 2 km sd, its
+     * first fixes then gated as outliers (a review's reproducer) */
+    if (s->restart_next || t_us - s->t_fix_step > s->gap_us) {
         if (!s->restart_next) {
             ++s->n.restarts;
         }

@@ -40,7 +40,8 @@
  *   of predict_period_s each while stale; WAIT: no steps until the next
  *   valid position.
  * - A step longer than HSTPF_DT_MAX_S is split into equal predict-only
- *   pieces; a gap longer than max_gap_s restarts the estimator (restart
+ *   pieces; a gap between positions longer than max_gap_s (predicted
+ *   across or not) restarts the estimator (restart
  *   flag on the step: the caller resets it) with the new position as the
  *   first fix.
  * - Time never goes back: an earlier timestamp counts as time_backwards and
@@ -113,6 +114,7 @@ typedef struct {
     int64_t step_us, pos_to_us, trac_to_us, pred_us, gap_us, first_us, dtmax_us;
     uint8_t started, have_step, have_u, have_pos, have_trac, pos_stale, trac_stale;
     int64_t t_now, t_start, t_step, t_pos, t_trac;
+    int64_t t_fix_step;        /* the last step with a position: the gap max_gap_s is measured from */
     int64_t t_due;  /* next point of the decimation grid */
     double u;       /* latest unit traction, N/kN */
     /* The held traction since t_step as segments: seg_u[i] from seg_t[i] to

@@ -303,6 +303,36 @@ static void test_long_gaps(void **state)
     assert_int_equal(s.n.restarts, 1);
 }
 
+/* The same under PREDICT, traction going on: the predict steps of the
+ * outage must not hide its length. A gap of positions beyond max_gap_s
+ * restarts the estimator although the last step was a second before. */
+static void test_long_gap_predicted(void **state)
+{
+    hstpfd_sched_t s;
+    hstpfd_sched_config_t c = base();
+    int i;
+    (void)state;
+    c.max_gap_s = 30.0;
+    c.predict_period_s = 10.0;
+    start(&s, &c);
+    hstpfd_sched_position(&s, T0, 0.0);
+    hstpfd_sched_position(&s, T0 + S(1.0), 10.0);
+    for (i = 2; i <= 40; ++i) {
+        hstpfd_sched_traction(&s, T0 + S(i), 49.05);
+    }
+    assert_true(s.n.predict_steps >= 3);
+    assert_int_equal(got[n_got - 1].in.has_position, 0);
+    assert_true(T0 + S(40.5) - got[n_got - 1].t_us <= S(10.0)); /* the last predict step is recent */
+    hstpfd_sched_position(&s, T0 + S(40.5), 405.0); /* 39.5 s after the last position */
+    assert_int_equal(got[n_got - 1].in.has_position, 1);
+    assert_int_equal(got[n_got - 1].restart, 1);
+    assert_int_equal(s.n.restarts, 1);
+    /* and a gap within max_gap_s after it is stepped across as before */
+    hstpfd_sched_position(&s, T0 + S(60.5), 605.0);
+    assert_int_equal(got[n_got - 1].restart, 0);
+    assert_int_equal(s.n.restarts, 1);
+}
+
 /* Time never goes back; a position not newer than the last step is late. */
 static void test_time_order(void **state)
 {
@@ -420,6 +450,7 @@ int main(void)
         cmocka_unit_test(test_stale_traction),
         cmocka_unit_test(test_decimation),
         cmocka_unit_test(test_long_gaps),
+        cmocka_unit_test(test_long_gap_predicted),
         cmocka_unit_test(test_time_order),
         cmocka_unit_test(test_before_first_fix),
         cmocka_unit_test(test_fix_time_dates_fixes),
