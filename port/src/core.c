@@ -193,6 +193,8 @@ static void set_time(hstpfd_core_t *c, int64_t src)
         t = c->t_now;
         c->back_at = t;
         hstpfd_sched_clock_step(&c->sched, t, -1);
+    } else if (t < c->t_now) {
+        ++c->sched.n.time_backwards; /* taken as the latest time (the scheduler never sees it) */
     } else if (forward_step(c, t)) {
         const int64_t t2 = c->t_now + CLOCK_BACK_US + (flapping(c) ? 0 : c->sched.gap_us);
         c->base -= t - t2;

@@ -994,6 +994,21 @@ static void test_stalled_sender(void **state)
     assert_true(a.resid_rms < 1.2 * clean.resid_rms);
 }
 
+/* Stamps 150 ms back at 300 s (within the 1 s a clock step needs): the two
+ * frames stamped before the latest time are taken at it and counted as
+ * time_backwards. The daemon clamped them before the scheduler, which
+ * counted, could see them: the count stayed 0 (a review's reproducer). */
+static void test_time_backwards_counted(void **state)
+{
+    (void)state;
+    shifted_log(DIR "/clean.log", DIR "/back150.log", S_US(300), -150000, 0);
+    assert_int_equal(run("--log " DIR "/back150.log " MODELS " --summary " DIR "/back150.json > /dev/null"), 0);
+    read_file(DIR "/back150.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "time_backwards"), 2);
+    assert_int_equal((int)num("faults", "clock_steps_back"), 0);
+    assert_true(is(NULL, "valid", "true"));
+}
+
 /* 300 s back at 300 s: counted, and the fixes after it are used, not
  * dropped as decimated or late. */
 static void test_clock_step_back(void **state)
@@ -1155,6 +1170,7 @@ int main(void)
         cmocka_unit_test(test_validity_csv),
         cmocka_unit_test(test_clock_garbage_line),
         cmocka_unit_test(test_clock_step_forward),
+        cmocka_unit_test(test_time_backwards_counted),
         cmocka_unit_test(test_clock_step_back),
         cmocka_unit_test(test_position_beyond_range),
         cmocka_unit_test(test_stuck_fix_time),
