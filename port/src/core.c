@@ -128,13 +128,11 @@ void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
     c->est_t_us = st->t_us;
     c->have_est_t = 1;
     hstpfd__write_step(c, st, rc);
-    /* the estimated state goes out after a step, at most once per cycle */
-    if (!c->state_sent || c->t_now - c->last_state_tx >= hstpfd_tx_cycle_us(0) - hstpfd_tx_cycle_us(0) / 50) {
-        c->state_sent = 1;
-        c->last_state_tx = c->t_now;
-        hstpfd__transmit(c, 0);
-        hstpfd__transmit(c, HSTPFD_OUT_QUALITY);
-    }
+    /* the estimated state goes out after a step, at most once per cycle; a
+     * step within the cycle goes out when it has passed (hstpfd__tx_service):
+     * dropped, the bus kept an estimate up to 200 ms old under 5 ms of jitter */
+    c->state_pending = 1;
+    hstpfd__state_service(c);
 }
 
 /* ---- time and frames --------------------------------------------------- */
@@ -206,6 +204,25 @@ static void set_time(hstpfd_core_t *c, int64_t src)
     }
 }
 
+/* The source time at which a pending EstState falls due (its cycle since
+ * the last one has passed; hstpfd__state_service), -1 when none is: an
+ * idle tick is made then, so a step's state is not held until the next
+ * frame. Timeline t = frame_time(src) + base, inverted and rounded up. */
+static int64_t state_due_src(const hstpfd_core_t *c)
+{
+    const int64_t cyc = hstpfd_tx_cycle_us(0);
+    double d;
+    if (!c->state_pending || !c->state_sent) {
+        return -1;
+    }
+    d = (double)(c->last_state_tx + cyc - cyc / 50 - c->base - c->src0);
+    if (c->cfg->time_scale != 1.0) {
+        d = ceil(d / c->cfg->time_scale);
+    }
+    d = d > SCALED_MAX_US ? SCALED_MAX_US : (d < -SCALED_MAX_US ? -SCALED_MAX_US : d);
+    return c->src0 + (int64_t)d;
+}
+
 static void tick(hstpfd_core_t *c, int64_t src)
 {
     ++c->n.ticks;
@@ -241,12 +258,15 @@ void hstpfd_core_idle(hstpfd_core_t *c, int64_t t_src_us)
         tick(c, t_src_us);
         return;
     }
-    while (c->last_src + c->tick_us <= t_src_us) {
-        if (c->stop != NULL && *c->stop) {
+    for (;;) {
+        const int64_t due = state_due_src(c);
+        int64_t next = c->last_src + c->tick_us;
+        next = due > c->last_src && due < next ? due : next;
+        if (next > t_src_us || (c->stop != NULL && *c->stop)) {
             return;
         }
-        c->last_src += c->tick_us;
-        tick(c, c->last_src);
+        c->last_src = next;
+        tick(c, next);
     }
 }
 
@@ -262,7 +282,9 @@ int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us)
     if (!c->have_time) {
         return -1;
     }
-    d = c->last_src + c->tick_us - t_src_us;
+    d = c->last_src + c->tick_us;
+    d = state_due_src(c) > c->last_src && state_due_src(c) < d ? state_due_src(c) : d;
+    d -= t_src_us;
     return d > 0 ? d : 0;
 }
 

@@ -62,6 +62,7 @@ typedef struct {
     int64_t src_now; /* latest source time seen (stamps of --frames-out) */
     int64_t next_tx[HSTPFD_N_OUTPUTS];
     uint8_t state_sent;
+    uint8_t state_pending; /* a step within the cycle of the last EstState: sent when it has passed */
     int64_t last_state_tx;
     /* estimate */
     hstpf_estimate_t est;

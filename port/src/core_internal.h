@@ -33,6 +33,8 @@ int hstpfd__est_valid(const hstpfd_core_t *c);
 void hstpfd__transmit(hstpfd_core_t *c, unsigned i);
 /* Sends the periodic outputs that are due at c->t_now. */
 void hstpfd__tx_service(hstpfd_core_t *c);
+/* The latest step's EstState and EstQuality, when pending and due. */
+void hstpfd__state_service(hstpfd_core_t *c);
 
 /* ---- the per-step stream (core_stream.c) ---- */
 /* The CSV header line (out_format csv). */

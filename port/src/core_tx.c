@@ -135,10 +135,26 @@ void hstpfd__transmit(hstpfd_core_t *c, unsigned i)
     }
 }
 
+/* The estimated state (EstState, then EstQuality) of the latest step, if
+ * one is pending and the state's cycle since the last has passed (2 %
+ * early allowed: stamps jitter). */
+void hstpfd__state_service(hstpfd_core_t *c)
+{
+    const int64_t cyc = hstpfd_tx_cycle_us(0);
+    if (c->state_pending && (!c->state_sent || c->t_now - c->last_state_tx >= cyc - cyc / 50)) {
+        c->state_sent = 1;
+        c->state_pending = 0;
+        c->last_state_tx = c->t_now;
+        hstpfd__transmit(c, 0);
+        hstpfd__transmit(c, HSTPFD_OUT_QUALITY);
+    }
+}
+
 /* The periodic outputs that are due at t_now. */
 void hstpfd__tx_service(hstpfd_core_t *c)
 {
     unsigned i;
+    hstpfd__state_service(c);
     for (i = 1; i < HSTPFD_N_OUTPUTS; ++i) {
         const int64_t cyc = hstpfd_tx_cycle_us(i);
         if (i == HSTPFD_OUT_QUALITY) {
