@@ -58,6 +58,13 @@ static void reset_state(hstpf_t *f)
     f->rf.logq = f->rf.active ? log(q0) : 0.0;
     f->rf.placed = 0;
     f->rf.nis = 1.0;
+    /* the hypothesis' state too: the estimate blends it in (a reset read the
+     * last run's speed and spreads, a review found) */
+    memset(f->rf.kz, 0, sizeof f->rf.kz);
+    memset(f->rf.kp, 0, sizeof f->rf.kp);
+    f->rf.loglik = 0.0;
+    f->rf.held = 0;
+    f->rf.floored = 0;
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
     /* the rows, and the slot of the hypothesis' grid model (unused without one) */
@@ -65,6 +72,13 @@ static void reset_state(hstpf_t *f)
         hstpf_model_t *m = &f->m[l];
         m->logq = lq;
         m->s_mean = m->v_mean = m->loglik = 0;
+        m->s_var = m->v_var = 0;
+        memset(m->kx, 0, sizeof m->kx);
+        memset(m->kp, 0, sizeof m->kp);
+        m->kll = 0.0;
+        m->held = 0;
+        m->k_placed = 0;
+        m->reacquired = 0;
         m->ess = (real)f->cfg.n_particles;
         m->floor_hits = 0;
         m->floor_run = 0;
@@ -88,6 +102,8 @@ static void reset_state(hstpf_t *f)
     f->arrival_s = 0.0;
     f->outlier_run = 0;
     f->lost_run = 0;
+    f->outliers = 0;
+    f->reacquired = 0;
 }
 
 /* The quantile part of spec's tables into q, built in de's place (its

@@ -646,6 +646,55 @@ static void test_prior_only_at_start(void **state)
     }
 }
 
+/* ---- hstpf_reset is a new start ---------------------------------------------- */
+
+static hstpf_t g; /* a fresh instance beside f */
+
+/* After hstpf_reset the estimate reads as before the first acquisition
+ * (states, spreads and counters zero, the rows' weights equal), and on the
+ * engines without an RNG (Kalman, grid) the run after it is a fresh
+ * instance's, bit for bit. A reset read the last run's speed (0.5 m/s) and
+ * spreads (75 m, 5 m/s) from the hypothesis' and the rows' state, and kept
+ * outliers and reacquired (a review's reproducer). */
+static void test_reset_is_a_new_start(void **state)
+{
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c, c2;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 2);
+        start(&c);
+        (void)run_fixes(0.0, 60);
+        (void)step(1.0, u_hold(), fix_at(61.0) + 5000.0, 1); /* gated */
+        (void)run_fixes(61.0, 10);
+        e = est();
+        assert_true(e.valid && e.outliers >= 1u && fabs((double)e.speed_mps - V_TRUE) < 2.0);
+        assert_int_equal(hstpf_reset(&f), HSTPF_OK);
+        e = est();
+        assert_false(e.valid);
+        assert_true(e.position_m == 0.0 && e.speed_mps == 0 && e.position_sd_m == 0.0 && e.speed_sd_mps == 0);
+        assert_true(e.outliers == 0u && e.reacquired == 0u && e.acquisitions == 0u);
+        assert_true(e.model[0].q == e.model[1].q);
+        if (engines[i] == HSTPF_ENGINE_PARTICLE) {
+            continue; /* its RNG streams go on (hstpf.h) */
+        }
+        c2 = c;
+        tu_workspace(&c2, 1);
+        assert_int_equal(hstpf_init(&g, sizeof g, &c2), HSTPF_OK);
+        for (k = 1; k <= 60; ++k) {
+            const hstpf_input_t in = tu_input(1.0, u_hold(), fix_at(100.0 + k), 1);
+            hstpf_estimate_t a, b;
+            assert_int_equal(hstpf_step(&f, &in), hstpf_step(&g, &in));
+            assert_int_equal(hstpf_estimate(&f, &a), HSTPF_OK);
+            assert_int_equal(hstpf_estimate(&g, &b), HSTPF_OK);
+            assert_true(a.position_m == b.position_m && a.speed_mps == b.speed_mps);
+            assert_true(a.position_sd_m == b.position_sd_m && a.speed_sd_mps == b.speed_sd_mps);
+            assert_true(a.model[0].q == b.model[0].q && a.q_offtable == b.q_offtable && a.valid == b.valid);
+        }
+    }
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -992,6 +1041,7 @@ int main(void)
         cmocka_unit_test(test_beyond_ranges_invalid),
         cmocka_unit_test(test_valid_within_ranges),
         cmocka_unit_test(test_prior_only_at_start),
+        cmocka_unit_test(test_reset_is_a_new_start),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),

@@ -639,9 +639,11 @@ int32_t hstpf_workspace_size(const hstpf_config_t *cfg, size_t *bytes);
 int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
 
 /**
- * @brief Restarts the estimation with the same configuration: uniform model
- * weights, no declaration, particles drawn again at the next fix.
- * RNG streams continue (not re-seeded).
+ * @brief Restarts the estimation with the same configuration, as after
+ * hstpf_init: states, spreads and counters zero, uniform model weights, no
+ * declaration, particles drawn again at the next fix. RNG streams continue
+ * (not re-seeded); the Kalman and grid engines, which draw none, then
+ * repeat a fresh instance's run exactly.
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(models).
  */
 int32_t hstpf_reset(hstpf_t *f);
