@@ -313,7 +313,8 @@ typedef struct {
      *  publish the leader's state. A row whose weight passes a gridded
      *  row's takes that row's grid, started from the leader's density
      *  moved to the row's own Kalman mean.
-     *  The workspace then holds min(grid_rows, n_models) row grids, and a
+     *  The workspace then holds min(grid_rows, n_models) row grids (n_models
+     *  when grid_rows is 0), and a
      *  17-row step costs that many grid model-steps plus a 2 x 2 filter
      *  per row. Under non-Gaussian process noise (Case 2's Gamma) every
      *  row is gridded whatever this says: the Kalman ratio is not a fair
@@ -453,7 +454,8 @@ typedef struct {
  * the cells of every model, the transported grid and a model's saved
  * cells for a retried step, and each model's mass at rest. Under
  * Gaussian process noise only cfg.grid_rows rows have a grid:
- * HSTPF_GRID_WS_BYTES(min(grid_rows, n_models)). Where the continuous
+ * HSTPF_GRID_WS_BYTES(min(grid_rows, n_models)), with grid_rows 0
+ * read as n_models. Where the continuous
  * hypothesis runs on a grid (cfg.refine 1 under non-Gaussian process
  * noise, or 2) it is one more grid model: HSTPF_GRID_WS_BYTES(n_models + 1)
  * under non-Gaussian process noise, HSTPF_GRID_WS_BYTES(min(grid_rows,
@@ -597,7 +599,9 @@ int32_t hstpf_config_default(hstpf_config_t *cfg);
  * memory rather than configuration), without an instance.
  * @param cfg    configuration to check.
  * @param field  if not NULL, set to the name of the first failing field
- *               (e.g. "noise_e.sd", "models[3].c1"), or to "" when valid.
+ *               (e.g. "noise_e", "models.c1", "track.start_m": the
+ *               field, not the row or the noise's member), or to "" when
+ *               valid. A static string.
  * @return HSTPF_OK or the error hstpf_init() would return. Cost
  *   O(n_models + n_track); no memory.
  */
