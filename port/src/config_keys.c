@@ -1,6 +1,7 @@
 /* hstpfd: the configuration keys: name, type, place, range and help of each
  * (docs/daemon.md lists them). */
 #include "config_internal.h"
+#include "hstpf_frames.h"
 
 #define OFF(m) offsetof(hstpfd_config_t, m)
 
@@ -41,15 +42,18 @@ const hstpfd__key_t hstpfd__keys[] = {
     {"mass_t", K_DBL, OFF(mass_t), 0, 1e5, 1, "train mass, t (traction kN -> N/kN)"},
     {"step_period_s", K_DBL, OFF(sched.step_period_s), 0, HSTPF_DT_MAX_S, 0,
      "0: a step per valid position frame; else step at most this often (decimate)"},
-    {"position_timeout_s", K_DBL, OFF(sched.pos_timeout_s), 0, 3600, 1,
-     "no valid position for longer: position stale"},
-    {"traction_timeout_s", K_DBL, OFF(sched.trac_timeout_s), 0, 3600, 1,
-     "no valid traction for longer: traction stale (last value held)"},
+    /* 1 ms to 14 cycles of the input frames (100 ms, the DBC): the E2E
+     * checker's timeout in whole ms, and a counter that wraps round (15
+     * values) within the timeout would read as in sequence (docs/can.md) */
+    {"position_timeout_s", K_DBL, OFF(sched.pos_timeout_s), 0.001, HSTPF_FRAME_POSITION_CYCLE_MS * 14 / 1000.0, 0,
+     "no valid position for longer: position stale (at most 14 cycles of the Position frame)"},
+    {"traction_timeout_s", K_DBL, OFF(sched.trac_timeout_s), 0.001, HSTPF_FRAME_TRACTION_CYCLE_MS * 14 / 1000.0, 0,
+     "no valid traction for longer: traction stale, last value held (at most 14 cycles)"},
     {"stale_policy", K_STALE, 0, 0, 0, 0, "position stale: predict (predict-only steps) | wait"},
     {"predict_period_s", K_DBL, OFF(sched.predict_period_s), 0, HSTPF_DT_MAX_S, 1,
      "length of the predict-only steps while position is stale, s"},
     {"max_gap_s", K_DBL, OFF(sched.max_gap_s), 0, 1e7, 1,
-     "a gap between steps longer than this restarts the estimator, s"},
+     "a gap between positions longer than this (predicted across or not) restarts the estimator, s"},
     {"traction_mode", K_TRACTION, 0, 0, 0, 0, "traction of a step: mean (time-weighted over the step) | latest"},
     {"e2e_max_delta", K_U32, OFF(e2e_max_delta), 1, 13, 0,
      "largest accepted alive-counter increment (1 = no frame may be lost)"},

@@ -58,8 +58,15 @@ static void test_set_numbers(void **state)
     assert_int_equal(hstpfd_config_set(&cfg, "gamma_rot", "0", err, sizeof err), 0); /* [0, 1] */
     assert_int_equal(hstpfd_config_set(&cfg, "gamma_rot", "1.01", err, sizeof err), -1);
     assert_int_equal(hstpfd_config_set(&cfg, "step_period_s", "0", err, sizeof err), 0);
-    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "2.5", err, sizeof err), 0);
-    assert_float_equal(cfg.sched.pos_timeout_s, 2.5, 0.0);
+    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "1.25", err, sizeof err), 0);
+    assert_float_equal(cfg.sched.pos_timeout_s, 1.25, 0.0);
+    /* 15 cycles of the 100 ms frame: a wrapped counter would read as in sequence */
+    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "1.5", err, sizeof err), -1);
+    assert_non_null(strstr(err, "position_timeout_s"));
+    assert_int_equal(hstpfd_config_set(&cfg, "traction_timeout_s", "2.5", err, sizeof err), -1);
+    /* the E2E checker's timeout is whole ms: 0.1 ms rounded to 0 was refused unnamed */
+    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "0.0001", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "position_timeout_s", "0.001", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "14", err, sizeof err), -1);
     assert_int_equal(hstpfd_config_set(&cfg, "e2e_max_delta", "1", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "send", "no", err, sizeof err), 0);
