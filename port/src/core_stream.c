@@ -58,7 +58,8 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
     out_key(fp, csv, "u");
     hstpfd__out_num(fp, csv, st->in.traction, 9);
     out_key(fp, csv, "y");
-    hstpfd__out_num(fp, csv, st->in.has_position ? st->in.position_m : HUGE_VAL, 9);
+    /* positions to 1 mm up to 1e8 m (the signal has 1 cm): 11 digits */
+    hstpfd__out_num(fp, csv, st->in.has_position ? st->in.position_m : HUGE_VAL, 11);
     out_key(fp, csv, "err");
     if (rc != HSTPF_OK) {
         if (csv) {
@@ -75,7 +76,7 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
         fprintf(fp, ",\"valid\":%s", valid ? "true" : "false");
     }
     out_key(fp, csv, "pos");
-    hstpfd__out_num(fp, csv, e->position_m, 9);
+    hstpfd__out_num(fp, csv, e->position_m, 11);
     out_key(fp, csv, "speed");
     hstpfd__out_num(fp, csv, (double)e->speed_mps, 9);
     out_key(fp, csv, "pos_sd"); /* null until the library provides it */
