@@ -108,18 +108,26 @@ def test_input_aligned_replay_with_faults(sim, tmp_path):
     assert json.loads(js.read_text())["position_rms_m"] < 5.0
 
 
-def test_wrong_declaration_is_reported(sim, tmp_path):
-    d, log, rows = sim
+def declaration_log(path, n, t_declare, declared, weight, theta):
+    """An estimator's EstType and EstTheta at 1 Hz for n s: undecided (255)
+    until t_declare, then `declared` (a Table 1 index, or 254 for a custom
+    row), theta published throughout."""
     codec = FrameCodec()
     msgs = []
-    for k in range(0, 300):
-        fid, data = codec.encode("EstType", {"TypeStatus": 1 if k >= 100 else 0, "DeclaredType": 6 if k >= 100 else 255,
-                                             "DeclaredWeight": 0.95, "LeaderType": 6, "LeaderWeight": 0.95})
+    for k in range(0, n):
+        fid, data = codec.encode("EstType", {"TypeStatus": 1 if k >= t_declare else 0,
+                                             "DeclaredType": declared if k >= t_declare else 255,
+                                             "DeclaredWeight": weight, "LeaderType": declared, "LeaderWeight": weight})
         msgs.append(message(float(k), fid, data))
-        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": SS8[0], "C1": SS8[1], "C2": SS8[2]})
+        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": theta[0], "C1": theta[1], "C2": theta[2]})
         msgs.append(message(float(k), fid, data))
+    write_log(str(path), msgs)
+
+
+def test_wrong_declaration_is_reported(sim, tmp_path):
+    d, log, rows = sim
     rec = tmp_path / "wrong.log"
-    write_log(str(rec), msgs)
+    declaration_log(rec, 300, 100, 6, 0.95, SS8)
     js = tmp_path / "m.json"
     assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--json", str(js)]) == 0
     res = json.loads(js.read_text())
@@ -350,16 +358,8 @@ def test_custom_declared_row_judged_by_its_theta(tmp_path, declared, correct):
     frames' resolution), not merely because both are "custom"."""
     log = tmp_path / "c.log"
     assert simulate.main(["-o", str(log), "--duration", "60", "--seed", "1", "--coeffs", "1.10,0.0090,0.000150"]) == 0
-    codec = FrameCodec()
-    msgs = []
-    for k in range(0, 60):
-        fid, data = codec.encode("EstType", {"TypeStatus": 1 if k >= 30 else 0, "DeclaredType": 254 if k >= 30 else 255,
-                                             "DeclaredWeight": 0.99, "LeaderType": 254, "LeaderWeight": 0.99})
-        msgs.append(message(float(k), fid, data))
-        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": declared[0], "C1": declared[1], "C2": declared[2]})
-        msgs.append(message(float(k), fid, data))
     rec = tmp_path / "rec.log"
-    write_log(str(rec), msgs)
+    declaration_log(rec, 60, 30, 254, 0.99, declared)
     js = tmp_path / "m.json"
     assert score.main([str(rec), "--truth", str(tmp_path / "c_truth.csv"), "--json", str(js)]) == 0
     res = json.loads(js.read_text())
