@@ -210,12 +210,12 @@ static void set_time(hstpfd_core_t *c, int64_t src)
  * frame. Timeline t = frame_time(src) + base, inverted and rounded up. */
 static int64_t state_due_src(const hstpfd_core_t *c)
 {
-    const int64_t cyc = hstpfd_tx_cycle_us(0);
+    const int64_t due = hstpfd__state_due(c);
     double d;
-    if (!c->state_pending || !c->state_sent) {
+    if (due <= 0) {
         return -1;
     }
-    d = (double)(c->last_state_tx + cyc - cyc / 50 - c->base - c->src0);
+    d = (double)(due - c->base - c->src0);
     if (c->cfg->time_scale != 1.0) {
         d = ceil(d / c->cfg->time_scale);
     }
@@ -282,9 +282,11 @@ int64_t hstpfd_core_idle_due(const hstpfd_core_t *c, int64_t t_src_us)
     if (!c->have_time) {
         return -1;
     }
-    d = c->last_src + c->tick_us;
-    d = state_due_src(c) > c->last_src && state_due_src(c) < d ? state_due_src(c) : d;
-    d -= t_src_us;
+    {
+        const int64_t due = state_due_src(c);
+        d = c->last_src + c->tick_us;
+        d = (due > c->last_src && due < d ? due : d) - t_src_us;
+    }
     return d > 0 ? d : 0;
 }
 

@@ -33,6 +33,9 @@ int hstpfd__est_valid(const hstpfd_core_t *c);
 void hstpfd__transmit(hstpfd_core_t *c, unsigned i);
 /* Sends the periodic outputs that are due at c->t_now. */
 void hstpfd__tx_service(hstpfd_core_t *c);
+/* The timeline time at which the latest step's EstState falls due (its
+ * cycle since the last one has passed), -1 when none is pending. */
+int64_t hstpfd__state_due(const hstpfd_core_t *c);
 /* The latest step's EstState and EstQuality, when pending and due. */
 void hstpfd__state_service(hstpfd_core_t *c);
 

@@ -135,13 +135,21 @@ void hstpfd__transmit(hstpfd_core_t *c, unsigned i)
     }
 }
 
-/* The estimated state (EstState, then EstQuality) of the latest step, if
- * one is pending and the state's cycle since the last has passed (2 %
- * early allowed: stamps jitter). */
-void hstpfd__state_service(hstpfd_core_t *c)
+int64_t hstpfd__state_due(const hstpfd_core_t *c)
 {
     const int64_t cyc = hstpfd_tx_cycle_us(0);
-    if (c->state_pending && (!c->state_sent || c->t_now - c->last_state_tx >= cyc - cyc / 50)) {
+    if (!c->state_pending) {
+        return -1;
+    }
+    return c->state_sent ? c->last_state_tx + cyc - cyc / 50 : 0; /* 2 % early: stamps jitter */
+}
+
+/* The estimated state (EstState, then EstQuality) of the latest step, if
+ * one is pending and due. */
+void hstpfd__state_service(hstpfd_core_t *c)
+{
+    const int64_t due = hstpfd__state_due(c);
+    if (due >= 0 && c->t_now >= due) {
         c->state_sent = 1;
         c->state_pending = 0;
         c->last_state_tx = c->t_now;
