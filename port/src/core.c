@@ -127,6 +127,11 @@ void hstpfd_core_publish(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
 {
     c->est_t_us = st->t_us;
     c->have_est_t = 1;
+    /* mapped now: the least latency may move before a deferred EstState
+     * goes out, and its EstTime came out a ms before the last one's, which
+     * a receiver unwraps as 8.191 s later */
+    c->have_est_fix = c->sched.have_fix;
+    c->est_fix_us = st->t_us - c->sched.fix_off;
     hstpfd__write_step(c, st, rc);
     /* the estimated state goes out after a step, at most once per cycle; a
      * step within the cycle goes out when it has passed (hstpfd__tx_service):

@@ -74,6 +74,8 @@ typedef struct {
     int64_t t_first_fix;
     uint8_t have_est_t;    /* est_t_us is set */
     int64_t est_t_us;      /* timeline time of the published estimate (its step's end) */
+    int64_t est_fix_us;    /* the same on the fix clock, as mapped at the step (EstTime) */
+    uint8_t have_est_fix;  /* est_fix_us is set: the step had a fix clock */
     int16_t declared_prev;
     int64_t decision_t;    /* frame time of the step that declared the current type */
     uint32_t floor_prev[HSTPF_MAX_MODELS];

@@ -55,9 +55,9 @@ static void tx_values(const hstpfd_core_t *c, unsigned i, hstpfd_tx_values_t *v)
     v->sd_valid = (uint8_t)LIB_HAS_SD;
     v->standstill = e->standstill;
     v->acquisitions = e->acquisitions;
-    if (c->sched.have_fix && c->have_est_t) {
-        /* the step's end on the fix clock: the inverse of the fix clock's mapping */
-        const int64_t ms = (c->est_t_us - c->sched.fix_off) / 1000;
+    if (c->have_est_fix && c->have_est_t) {
+        /* the step's end on the fix clock: the inverse of the fix clock's mapping at the step */
+        const int64_t ms = c->est_fix_us / 1000;
         const int64_t w = (int64_t)HSTPFD_FIX_WRAP_MS;
         v->est_time_valid = 1;
         v->est_time_ms = (uint16_t)(((ms % w) + w) % w);

@@ -461,6 +461,7 @@ static void test_state_deferred_not_dropped(void **state)
     int n_state = 0;
     double steps;
     int64_t last = -1, gap_max = 0;
+    int last_ms = -1;
     (void)state;
     generate(&g);
     assert_int_equal(run("--log " DIR "/jit5.log " MODELS " --step-period-s 0 --frames-out " DIR
@@ -474,6 +475,14 @@ static void test_state_deferred_not_dropped(void **state)
     while (fgets(line, sizeof line, fp) != NULL) {
         hstpfd_frame_t f;
         assert_int_equal(hstpfd_candump_parse(line, &f, NULL, 0), HSTPFD_CANDUMP_OK);
+        if (f.id == HSTPF_FRAME_EST_QUALITY_ID) { /* EstTime never goes back (mod the wrap) */
+            struct hstpf_can_est_quality_t q;
+            assert_int_equal(hstpf_can_est_quality_unpack(&q, f.data, f.len), 0);
+            if (q.est_time_valid && last_ms >= 0) {
+                assert_true((q.est_time - last_ms + 8192) % 8192 < 4096);
+            }
+            last_ms = q.est_time_valid ? (int)q.est_time : last_ms;
+        }
         if (f.id == HSTPF_FRAME_EST_STATE_ID) {
             ++n_state;
             if (last >= 0 && f.t_us - last > gap_max) {
