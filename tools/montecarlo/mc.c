@@ -1321,6 +1321,10 @@ static void usage_to(FILE *out)
 }
 
 /* A bad command line: the reason on stderr; returns the exit status 2. */
+#if defined(__GNUC__) || defined(__clang__)
+__attribute__((format(printf, 1, 2)))
+#endif
+static int bad(const char *fmt, ...);
 static int bad(const char *fmt, ...)
 {
     va_list ap;
@@ -1610,7 +1614,7 @@ int main(int argc, char **argv)
         return bad(!sc.all17 && !models_list ? "--truth %s: the paper's scenarios have one truth, CRH3 (with --models "
                                                "every row of the bank is a truth)"
                                              : "--truth %s: no such row in the bank",
-                   truth_name);
+                   truth_name ? truth_name : "");
     }
     w.sc = &sc;
     w.st = &st;
