@@ -77,7 +77,7 @@ def test_models_custom_bank(mc, tmp_path):
     truth in turn; the custom row is simulated with its own coefficients,
     so its own row fits the data and leads the bank at the end."""
     out = tmp_path / "m.json"
-    bank = "CRH1,crh3,MyEMU:1.10:0.0090:0.000150"
+    bank = "CRH1, crh3 , MyEMU : 1.10:0.0090 :0.000150"
     subprocess.run([mc, "--scenario", "all17", "--models", bank, "--seeds", "2", "--duration", "900",
                     "--threads", "1", "--json", str(out)], capture_output=True, text=True, check=True)
     res = json.loads(out.read_text())["results"]
@@ -96,7 +96,13 @@ def test_models_custom_bank(mc, tmp_path):
     (["--scenario", "all17", "--truth", "NoSuch"], "no such row"),
     (["--scenario", "all17", "--models", "CRH1,Mine:1:0.01"], "'Mine:1:0.01' must be name:c0:c1:c2"),
     (["--scenario", "all17", "--models", "CRH1,Nope"], "'Nope' is not a Table 1 name"),
-    (["--scenario", "all17", "--models", "CRH1,X:1:2:0"], "must lie in"),
+    (["--scenario", "all17", "--models", "CRH1,X:1:2:0"], "must be numbers in"),
+    (["--scenario", "all17", "--models", "CRH1,X:1::0.0001"], "must be numbers in"),
+    (["--scenario", "all17", "--models", "CRH1,X:1:0:0.0001"], "must be numbers in"),
+    (["--scenario", "all17", "--models", 'CRH1,My"EMU:1:0.01:0.0001'], "printable characters"),
+    (["--scenario", "all17", "--models", "CRH1,crh3:5:0.02:0.0005"], "may not take a Table 1 name"),
+    (["--scenario", "all17", "--models", "MyEMU:1:0.01:0.0001,all"], "more than"),
+    (["--scenario", "absent", "--models", "CRH3"], "2 rows or more"),
     (["--scenario", "all17", "--models", "CRH1,crh1"], "twice"),
     (["--scenario", "all17", "--models", "CRH1,"], "empty"),
 ])

@@ -108,10 +108,11 @@ def test_input_aligned_replay_with_faults(sim, tmp_path):
     assert json.loads(js.read_text())["position_rms_m"] < 5.0
 
 
-def declaration_log(path, n, t_declare, declared, weight, theta):
+def declaration_log(path, n, t_declare, declared, weight, theta, theta_valid_before=None):
     """An estimator's EstType and EstTheta at 1 Hz for n s: undecided (255)
     until t_declare, then `declared` (a Table 1 index, or 254 for a custom
-    row), theta published throughout."""
+    row), theta published throughout (valid before theta_valid_before only,
+    if given)."""
     codec = FrameCodec()
     msgs = []
     for k in range(0, n):
@@ -119,7 +120,8 @@ def declaration_log(path, n, t_declare, declared, weight, theta):
                                              "DeclaredType": declared if k >= t_declare else 255,
                                              "DeclaredWeight": weight, "LeaderType": declared, "LeaderWeight": weight})
         msgs.append(message(float(k), fid, data))
-        fid, data = codec.encode("EstTheta", {"ThetaValid": 1, "C0": theta[0], "C1": theta[1], "C2": theta[2]})
+        valid = 1 if theta_valid_before is None or k < theta_valid_before else 0
+        fid, data = codec.encode("EstTheta", {"ThetaValid": valid, "C0": theta[0], "C1": theta[1], "C2": theta[2]})
         msgs.append(message(float(k), fid, data))
     write_log(str(path), msgs)
 
@@ -364,3 +366,15 @@ def test_custom_declared_row_judged_by_its_theta(tmp_path, declared, correct):
     assert score.main([str(rec), "--truth", str(tmp_path / "c_truth.csv"), "--json", str(js)]) == 0
     res = json.loads(js.read_text())
     assert res["declared_type"] == "custom" and res["declared_correct"] is correct
+
+
+def test_custom_declared_row_without_its_theta(tmp_path):
+    """A declared custom row whose theta never went out valid within the
+    declaration (beyond the frame's range: saturated) is not judged at all."""
+    log = tmp_path / "c.log"
+    assert simulate.main(["-o", str(log), "--duration", "60", "--seed", "1", "--coeffs", "1.10,0.0090,0.000150"]) == 0
+    rec = tmp_path / "rec.log"
+    declaration_log(rec, 60, 30, 254, 0.99, (1.10, 0.0090, 0.000150), theta_valid_before=30)
+    js = tmp_path / "m.json"
+    assert score.main([str(rec), "--truth", str(tmp_path / "c_truth.csv"), "--json", str(js)]) == 0
+    assert json.loads(js.read_text())["declared_correct"] is None

@@ -210,14 +210,18 @@ QUALITY_PAIR_S = 0.05
 THETA_LSB = (0.001, 1e-6, 2e-8)
 
 
-def custom_is_truth(series, t_type: float, th_true: Theta) -> bool:
+def custom_is_truth(series, t_from: float, t_type: float, th_true: Theta) -> Optional[bool]:
     """Every custom row goes out as DeclaredType 254, without its name; a
     declared row publishes its own theta, so the declared custom row is the
-    truth's when the EstTheta beside the last EstType is the truth's theta
-    to the frame's resolution."""
-    thf = [s for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5 and t <= t_type + QUALITY_PAIR_S]
+    truth's when the last valid EstTheta of the final declaration (from
+    t_from to the last EstType, t_type) is the truth's theta to the frame's
+    resolution. None (unknown) without one: a theta beyond the frame's
+    range goes out invalid (saturated), and one from before the
+    declaration is a blend."""
+    thf = [s for t, s in series[EST_THETA]
+           if s["ThetaValid"] >= 0.5 and t_from - QUALITY_PAIR_S <= t <= t_type + QUALITY_PAIR_S]
     if not thf:
-        return False
+        return None
     s = thf[-1]
     return all(abs(s[k] - v) <= lsb for k, v, lsb in zip(("C0", "C1", "C2"), (th_true.c0, th_true.c1, th_true.c2),
                                                            THETA_LSB))
@@ -271,7 +275,7 @@ def metrics(series, truth) -> dict:
     res["declared_type"] = declared
     res["declared_correct"] = declared == th_true.name
     if declared is not None and last == TYPE_CUSTOM:
-        res["declared_correct"] = custom_is_truth(series, ty[-1][0], th_true)
+        res["declared_correct"] = custom_is_truth(series, decision, ty[-1][0], th_true)
     res["decision_time_s"] = decision
     thf = [(t, s) for t, s in series[EST_THETA] if s["ThetaValid"] >= 0.5]
     if thf:

@@ -1350,83 +1350,136 @@ static int same_name(const char *a, const char *b)
     return *a == *b;
 }
 
-/* --models: a comma-separated bank of Table 1 names and custom rows
- * name:c0:c1:c2 (hstpfd's models key); names kept in names. Returns the
- * number of rows, or -1 with the reason printed. */
+/* s[0..n) without its leading and trailing blanks, into out (size > n). */
+static void trimmed(const char *s, size_t n, char *out)
+{
+    while (n > 0 && isspace((unsigned char)*s)) {
+        ++s;
+        --n;
+    }
+    while (n > 0 && isspace((unsigned char)s[n - 1])) {
+        --n;
+    }
+    memcpy(out, s, n);
+    out[n] = '\0';
+}
+
+/* A coefficient field of a custom row: a whole number, in (0, hi]. hstpf-mc
+ * scores each coefficient's relative error, so none may be 0. */
+static int coefficient(const char *item, const char *field, double hi, double *x)
+{
+    char buf[64], *end;
+    const char *colon = strchr(field, ':');
+    const size_t n = colon ? (size_t)(colon - field) : strlen(field);
+    if (n >= sizeof buf) {
+        return -1;
+    }
+    trimmed(field, n, buf);
+    *x = strtod(buf, &end);
+    if (end == buf || *end != '\0' || !(*x > 0.0 && *x <= hi)) {
+        (void)bad("--models: '%s': c0, c1, c2 must be numbers in (0, %g], (0, %g], (0, %g] (each coefficient's "
+                  "relative error is scored)",
+                  item, HSTPF_C0_MAX, HSTPF_C1_MAX, HSTPF_C2_MAX);
+        return -1;
+    }
+    return 0;
+}
+
+/* --models: a comma-separated bank of Table 1 names (any case), `all`, and
+ * custom rows name:c0:c1:c2, as hstpfd's models key (blanks around each
+ * entry and field ignored); names kept in names. A custom name is 1-31
+ * printable characters without '"' or '\' (they go into the JSON as they
+ * are) and is not a Table 1 name (the near-identical pairs are known by
+ * name). Returns the number of rows, or -1 with the reason printed. */
 static int parse_models(const char *list, hstpf_theta_t *models, char (*names)[NAME_MAX_LEN + 1])
 {
     int n = 0;
     const char *p = list;
-    while (*p) {
+    for (;;) {
         const char *end = strchr(p, ',');
         const size_t len = end ? (size_t)(end - p) : strlen(p);
         char item[160];
-        char *colon;
+        const char *colon, *q;
         int k;
-        if (n == MAXM) {
-            (void)bad("--models: more than %d rows", MAXM);
+        if (len >= sizeof item) {
+            (void)bad("--models: an entry of %u characters", (unsigned)len);
             return -1;
         }
-        if (len == 0 || len >= sizeof item) {
-            (void)bad("--models: empty or over-long entry in '%s'", list);
+        trimmed(p, len, item);
+        if (item[0] == '\0') {
+            (void)bad("--models: an empty entry in '%s'", list);
             return -1;
         }
-        memcpy(item, p, len);
-        item[len] = '\0';
         colon = strchr(item, ':');
-        if (colon == NULL) {
+        if (colon == NULL && same_name(item, "all")) {
+            if (n + HSTPF_N_TRAIN_TYPES > MAXM) {
+                (void)bad("--models: more than %d rows", MAXM);
+                return -1;
+            }
+            for (k = 0; k < HSTPF_N_TRAIN_TYPES; ++k) {
+                models[n++] = hstpf_train_types[k];
+            }
+        } else if (colon == NULL) {
             for (k = 0; k < HSTPF_N_TRAIN_TYPES && !same_name(hstpf_train_types[k].name, item); ++k) {
             }
             if (k == HSTPF_N_TRAIN_TYPES) {
                 (void)bad("--models: '%s' is not a Table 1 name; a custom row is name:c0:c1:c2", item);
-            return -1;
+                return -1;
             }
-            models[n] = hstpf_train_types[k];
+            if (n == MAXM) {
+                (void)bad("--models: more than %d rows", MAXM);
+                return -1;
+            }
+            models[n++] = hstpf_train_types[k];
         } else {
-            char *e1, *e2 = item, *e3 = item;
+            const char *c1 = strchr(colon + 1, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+            char name[NAME_MAX_LEN + 1];
             const size_t nl = (size_t)(colon - item);
-            const double c0 = strtod(colon + 1, &e1);
-            const double c1 = *e1 == ':' ? strtod(e1 + 1, &e2) : 0.0;
-            const double c2 = *e1 == ':' && *e2 == ':' ? strtod(e2 + 1, &e3) : 0.0;
-            if (*e1 != ':' || *e2 != ':' || *e3 != '\0' || e3 == e2 + 1 || nl == 0 || nl > NAME_MAX_LEN) {
+            if (c1 == NULL || c2 == NULL || strchr(c2 + 1, ':') != NULL || nl > NAME_MAX_LEN) {
                 (void)bad("--models: custom entry '%s' must be name:c0:c1:c2, a name of 1-%d characters", item,
-                           NAME_MAX_LEN);
-            return -1;
+                          NAME_MAX_LEN);
+                return -1;
             }
-            if (!(c0 >= 0.0 && c0 <= HSTPF_C0_MAX && c1 >= 0.0 && c1 <= HSTPF_C1_MAX && c2 >= 0.0 &&
-                  c2 <= HSTPF_C2_MAX)) {
-                (void)bad("--models: '%s': c0, c1, c2 must lie in [0, %g], [0, %g], [0, %g]", item, HSTPF_C0_MAX,
-                           HSTPF_C1_MAX, HSTPF_C2_MAX);
-            return -1;
+            trimmed(item, nl, name);
+            for (q = name; *q && isprint((unsigned char)*q) && *q != '"' && *q != '\\'; ++q) {
             }
-            memcpy(names[n], item, nl);
-            names[n][nl] = '\0';
+            if (name[0] == '\0' || *q != '\0') {
+                (void)bad("--models: '%s': a name of printable characters, without '\"' or '\\'", item);
+                return -1;
+            }
+            for (k = 0; k < HSTPF_N_TRAIN_TYPES && !same_name(hstpf_train_types[k].name, name); ++k) {
+            }
+            if (k < HSTPF_N_TRAIN_TYPES) {
+                (void)bad("--models: '%s': a custom row may not take a Table 1 name", item);
+                return -1;
+            }
+            if (n == MAXM) {
+                (void)bad("--models: more than %d rows", MAXM);
+                return -1;
+            }
+            if (coefficient(item, colon + 1, HSTPF_C0_MAX, &models[n].c0) != 0 ||
+                coefficient(item, c1 + 1, HSTPF_C1_MAX, &models[n].c1) != 0 ||
+                coefficient(item, c2 + 1, HSTPF_C2_MAX, &models[n].c2) != 0) {
+                return -1;
+            }
+            memcpy(names[n], name, strlen(name) + 1);
             models[n].name = names[n];
-            models[n].c0 = c0;
-            models[n].c1 = c1;
-            models[n].c2 = c2;
+            ++n;
         }
-        for (k = 0; k < n; ++k) {
-            if (same_name(models[k].name, models[n].name)) {
-                (void)bad("--models: '%s' twice", models[n].name);
-            return -1;
+        for (k = 0; k < n - 1; ++k) {
+            int j;
+            for (j = k + 1; j < n; ++j) {
+                if (same_name(models[k].name, models[j].name)) {
+                    (void)bad("--models: '%s' twice", models[j].name);
+                    return -1;
+                }
             }
         }
-        ++n;
-        p += len;
-        if (*p == ',') {
-            ++p;
-            if (*p == '\0') {
-                (void)bad("--models: empty entry at the end of '%s'", list);
-            return -1;
-            }
+        if (end == NULL) {
+            return n;
         }
+        p = end + 1;
     }
-    if (n == 0) {
-        (void)bad("--models: no rows");
-        return -1;
-    }
-    return n;
 }
 
 int main(int argc, char **argv)
@@ -1588,6 +1641,9 @@ int main(int argc, char **argv)
         n_models = parse_models(models_list, models, custom);
         if (n_models < 0) {
             return 2;
+        }
+        if (sc.absent && n_models < 2) {
+            return bad("--scenario %s leaves the truth's row out of the bank: --models needs 2 rows or more", sc.name);
         }
     } else if (sc.all17) {
         n_models = HSTPF_N_TRAIN_TYPES;
