@@ -348,6 +348,21 @@ static void test_position_beyond_range(void **state)
     assert_true(in_window >= 5);
 }
 
+/* g's log generated and run with MODELS; its summary (g's path, .json for
+ * .log) read into summary. */
+static void run_generated(const genlog_t *g)
+{
+    char cmd[1024], js[512];
+    const size_t n = strlen(g->path);
+    assert_true(n > 4 && n < sizeof js && strcmp(g->path + n - 4, ".log") == 0);
+    memcpy(js, g->path, n - 4);
+    strcpy(js + n - 4, ".json");
+    generate(g);
+    (void)snprintf(cmd, sizeof cmd, "--log %s " MODELS " --summary %s > /dev/null", g->path, js);
+    assert_int_equal(run(cmd), 0);
+    read_file(js, summary, sizeof summary);
+}
+
 /* A sender whose fix time stops moving at 150 s while its frames keep
  * coming: each fix was dated a little later by the least latency's creep,
  * every one decimated, no step was made after 150 s and the summary said
@@ -357,9 +372,7 @@ static void test_stuck_fix_time(void **state)
 {
     genlog_t g = {DIR "/stuck.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 150, 0, 0};
     (void)state;
-    generate(&g);
-    assert_int_equal(run("--log " DIR "/stuck.log " MODELS " --summary " DIR "/stuck.json > /dev/null"), 0);
-    read_file(DIR "/stuck.json", summary, sizeof summary);
+    run_generated(&g);
     assert_int_equal((int)num("faults", "position_stale"), 1);
     assert_true(num(NULL, "steps") >= 295.0);    /* the steps go on to the end */
     assert_true(num(NULL, "predict_steps") >= 140.0);
@@ -374,9 +387,7 @@ static void test_outage_counter_in_sequence(void **state)
 {
     genlog_t g = {DIR "/gap76.log", 300, 0, 1, 1, MASS_T, 0, 0, 0, 0, 0, 2000, 76};
     (void)state;
-    generate(&g);
-    assert_int_equal(run("--log " DIR "/gap76.log " MODELS " --summary " DIR "/gap76.json > /dev/null"), 0);
-    read_file(DIR "/gap76.json", summary, sizeof summary);
+    run_generated(&g);
     assert_int_equal((int)num("faults", "position_stale"), 1);
     assert_true(num("faults", "late_position") <= 1.0);
     assert_int_equal((int)num("scheduler", "fix_clock_steps"), 0);

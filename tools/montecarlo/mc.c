@@ -1393,14 +1393,13 @@ static int coefficient(const char *item, const char *field, double hi, double *x
  * name). Returns the number of rows, or -1 with the reason printed. */
 static int parse_models(const char *list, hstpf_theta_t *models, char (*names)[NAME_MAX_LEN + 1])
 {
-    int n = 0;
+    int n = 0, k;
     const char *p = list;
     for (;;) {
         const char *end = strchr(p, ',');
         const size_t len = end ? (size_t)(end - p) : strlen(p);
         char item[160];
         const char *colon, *q;
-        int k;
         if (len >= sizeof item) {
             (void)bad("--models: an entry of %u characters", (unsigned)len);
             return -1;
@@ -1466,20 +1465,21 @@ static int parse_models(const char *list, hstpf_theta_t *models, char (*names)[N
             models[n].name = names[n];
             ++n;
         }
-        for (k = 0; k < n - 1; ++k) {
-            int j;
-            for (j = k + 1; j < n; ++j) {
-                if (same_name(models[k].name, models[j].name)) {
-                    (void)bad("--models: '%s' twice", models[j].name);
-                    return -1;
-                }
-            }
-        }
         if (end == NULL) {
-            return n;
+            break;
         }
         p = end + 1;
     }
+    for (k = 0; k < n - 1; ++k) {
+        int j;
+        for (j = k + 1; j < n; ++j) {
+            if (same_name(models[k].name, models[j].name)) {
+                (void)bad("--models: '%s' twice", models[j].name);
+                return -1;
+            }
+        }
+    }
+    return n;
 }
 
 int main(int argc, char **argv)
