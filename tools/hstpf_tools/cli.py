@@ -17,6 +17,7 @@ import argparse
 import contextlib
 import io
 import json
+import math
 import os
 import signal
 import sys
@@ -180,12 +181,14 @@ def output_error(path: str, exc: BaseException) -> BaseException:
 def read_text(path: str) -> str:
     """The text of a file, '-' for stdin; CliError(3) if it cannot be read."""
     if path == "-":
-        return sys.stdin.read()
-    try:
-        with open(path, newline="") as f:
-            return f.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise input_error(path, exc) from exc
+        text = sys.stdin.read()
+    else:
+        try:
+            with open(path, newline="", encoding="utf-8") as f:
+                text = f.read()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise input_error(path, exc) from exc
+    return text[1:] if text.startswith("\ufeff") else text  # a spreadsheet's "CSV UTF-8" begins with a BOM
 
 
 def write_text(path: str, text: str) -> None:
@@ -210,8 +213,21 @@ def add_json_argument(p: argparse.ArgumentParser, *aliases: str, what: str = "th
                    help=f"write {what} to FILE; '-': stdout, one compact JSON line and nothing else{default}")
 
 
+def _finite(obj: Any) -> Any:
+    """obj with every non-finite float as None: JSON has no inf or nan."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
+
+
 def dumps(obj: Any) -> str:
-    return json.dumps(obj, separators=(",", ":"), sort_keys=True)
+    """Compact, sorted JSON; a non-finite number (e.g. the relative error
+    against a zero coefficient) is null."""
+    return json.dumps(_finite(obj), separators=(",", ":"), sort_keys=True, allow_nan=False)
 
 
 def emit_report(report: dict, json_path: Optional[str], stdout_taken: bool = False) -> None:
@@ -223,6 +239,25 @@ def emit_report(report: dict, json_path: Optional[str], stdout_taken: bool = Fal
         (sys.stderr if stdout_taken else sys.stdout).flush()
     else:
         write_text(json_path, text)
+
+
+def parse_ids(spec: str) -> set:
+    """An --ids list, e.g. 0x100,0x101: an ID up to 0x7FF selects 11-bit
+    frames, a larger one 29-bit frames (as candump writes them)."""
+    try:
+        ids = {int(x, 0) for x in spec.split(",") if x.strip()}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"bad ID list {spec!r}: want e.g. 0x200,0x210") from None
+    bad = [i for i in ids if not 0 <= i <= 0x1FFFFFFF]
+    if bad or not ids:
+        raise argparse.ArgumentTypeError(f"bad ID list {spec!r}: want IDs in 0..0x1FFFFFFF, e.g. 0x200,0x210")
+    return ids
+
+
+def id_selected(msg, ids: Optional[set]) -> bool:
+    """msg is one of parse_ids()'s frames (ids None: every frame): the same
+    ID, 11-bit or 29-bit as the ID's size says."""
+    return ids is None or (msg.arbitration_id in ids and bool(msg.is_extended_id) == (msg.arbitration_id > 0x7FF))
 
 
 def check_stdout_once(**uses: Optional[str]) -> None:

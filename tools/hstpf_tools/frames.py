@@ -30,6 +30,13 @@ STATUS_NAMES = ("undecided", "declared", "changed", "withdrawn")
 E2E_SIGNALS = ("E2eCrc", "E2eCounter")
 
 
+def is_hstpf_frame(msg) -> bool:
+    """msg can be one of hstpf's frames: a classic data frame with an 11-bit
+    ID. hstpfd takes nothing else (port/src/frames.c): a 29-bit, remote,
+    CAN FD or error frame with the same ID number is someone else's."""
+    return not (msg.is_extended_id or msg.is_remote_frame or getattr(msg, "is_fd", False) or msg.is_error_frame)
+
+
 def type_index(name: str) -> int:
     """Table 1 index of a type name: exact, case-insensitive, or one part of
     a slash-separated row ("SS4" -> "SS1/SS3/SS4"). KeyError if none."""
@@ -127,6 +134,13 @@ class FrameCodec:
         if isinstance(name_or_id, str):
             return self.db.get_message_by_name(name_or_id)
         return self.db.get_message_by_frame_id(name_or_id)
+
+    def message_name(self, frame_id: int) -> Optional[str]:
+        """The name of the frame with this ID, None if the DBC has none."""
+        try:
+            return self.message(frame_id).name
+        except KeyError:
+            return None
 
     def clamp(self, msg, values: Dict[str, float]) -> Dict[str, float]:
         """All signals of msg (missing ones 0), clamped to the DBC ranges."""

@@ -1,5 +1,8 @@
 """candump logs through python-can's readers and writers."""
+import io
 import math
+import sys
+from pathlib import Path
 from typing import Iterable, List
 
 import can
@@ -35,16 +38,55 @@ def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") ->
     return n
 
 
+# the text formats read line by line when a line is bad: python-can's reader, header lines
+_LINE_READERS = {".log": (can.CanutilsLogReader, 0), ".csv": (can.CSVReader, 1)}
+
+
+def _read_lines(text: str, path: str, reader, header: int) -> List[can.Message]:
+    """Each line of a text log through python-can's reader; a line it
+    cannot read (a recording cut off mid-line, a comment) is left out with
+    a warning that names it, as hstpfd counts it in bad_lines. ValueError
+    when no line can be read."""
+    lines = text.splitlines()
+    out: List[can.Message] = []
+    bad = []
+    for n, line in enumerate(lines[header:], start=header + 1):
+        if not line.strip():
+            continue
+        try:
+            with reader(io.StringIO("\n".join(lines[:header] + [line]) + "\n")) as r:
+                out.extend(r)
+        except Exception as exc:  # python-can's readers raise many kinds on bad text
+            bad.append(f"line {n} {line[:40]!r}: {exc}")
+    if bad and not out:
+        raise ValueError(f"not one line python-can can read; {bad[0]}")
+    if bad:
+        print(f"warning: {path}: {len(bad)} line(s) python-can cannot read were left out; the first: {bad[0]}",
+              file=sys.stderr)
+    return out
+
+
 def read_log(path: str) -> List[can.Message]:
     """Every message of a log python-can reads (by suffix); '-' is candump
-    -L text on stdin."""
+    -L text on stdin. In a candump or CSV text a line that cannot be read is
+    left out with a warning."""
+    suffix = ".log" if str(path) == "-" else Path(path).suffix.lower()
+    if suffix not in _LINE_READERS:
+        with can.LogReader(path) as r:
+            return list(r)
     if str(path) == "-":
         from .cli import stdin
 
-        with can.CanutilsLogReader(stdin()) as r:
+        text = stdin().read()
+    else:
+        with open(path, newline="") as f:
+            text = f.read()
+    reader, header = _LINE_READERS[suffix]
+    try:
+        with reader(io.StringIO(text)) as r:
             return list(r)
-    with can.LogReader(path) as r:
-        return list(r)
+    except Exception:  # read again line by line, to leave out only what is bad
+        return _read_lines(text, str(path), reader, header)
 
 
 def fix_time_ms(t_s: float, wrap_ms: int = FIX_TIME_WRAP_MS) -> int:

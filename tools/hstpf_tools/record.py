@@ -47,7 +47,7 @@ def record(bus: can.BusABC, out: str, duration: Optional[float] = None, quiet: O
                 break
             if msg is None:
                 continue
-            if ids is not None and not msg.is_error_frame and msg.arbitration_id not in ids:
+            if not msg.is_error_frame and not cli.id_selected(msg, ids):
                 continue
             t_last = time.monotonic()
             ts_first = msg.timestamp if ts_first is None else ts_first
@@ -67,13 +67,6 @@ def record(bus: can.BusABC, out: str, duration: Optional[float] = None, quiet: O
     if error is not None:
         res["error"] = error
     return res
-
-
-def _ids(spec: str):
-    try:
-        return {int(x, 0) for x in spec.split(",") if x.strip()}
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"bad ID list {spec!r}: want e.g. 0x200,0x210") from None
 
 
 def _seconds(spec: str) -> float:
@@ -98,7 +91,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--first-timeout", type=_seconds, default=60.0,
                    help="give up if no frame comes in this time, s (60)")
     p.add_argument("--max-frames", type=int, help="stop after this many frames")
-    p.add_argument("--ids", type=_ids, help="only these IDs, e.g. 0x200,0x210 (error frames are always kept)")
+    p.add_argument("--ids", type=cli.parse_ids,
+                   help="only these IDs, e.g. 0x200,0x210; above 0x7FF: 29-bit IDs (error frames are always kept)")
     cli.add_json_argument(p, default=" (default: stdout, or stderr when -o is '-')")
     cli.add_progress_argument(p)
     return p

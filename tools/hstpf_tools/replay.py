@@ -39,8 +39,14 @@ def _window(spec: str) -> Tuple[float, float]:
     return w
 
 
-def _ids(spec: str):
-    return {int(x, 0) for x in spec.split(",") if x.strip()}
+def _std_id(spec: str) -> int:
+    try:
+        i = int(spec, 0)
+    except ValueError:
+        i = -1
+    if not 0 <= i <= 0x7FF:
+        raise argparse.ArgumentTypeError(f"{spec!r}: want an 11-bit ID, 0..0x7FF")
+    return i
 
 
 def _copy(m: can.Message, t: Optional[float] = None, data: Optional[bytes] = None) -> can.Message:
@@ -65,10 +71,12 @@ def inject(
     delay_s: float = 0.25,
     unknown_id: int = 0x7F0,
 ):
-    """Returns (faulted messages sorted by time, report dict). Window times
-    are seconds from the first frame of the log."""
+    """Returns (faulted messages, report dict). The log's order is kept (a
+    clock step in it stays one); a delayed frame goes after the frames
+    that follow it within the delay, a duplicate or an unknown frame right
+    after its frame. Window times are seconds from the first frame of the log."""
     rng = np.random.default_rng(seed)
-    out: List[Tuple[float, int, can.Message]] = []  # (time, order, msg)
+    out: List[Tuple[float, can.Message]] = []  # (place: the log index, fractions after it; msg)
     if not msgs:
         return [], {"frames_in": 0, "frames_out": 0, "injected": {}, "seed": seed}
     t_start = msgs[0].timestamp
@@ -83,23 +91,20 @@ def inject(
     pending_swap: Dict[int, int] = {}  # arbitration id -> index of the frame waiting for its swap
     msgs = [_copy(m) for m in msgs]
     skip = set()
-    order = 0
     for i, m in enumerate(msgs):
         r = m.timestamp - t_start
         key = f"0x{m.arbitration_id:03X}"
-        eligible = (ids is None or m.arbitration_id in ids) and not m.is_error_frame
+        eligible = cli.id_selected(m, ids) and not m.is_error_frame
         u = rng.random()  # drawn for every frame: faults do not shift later draws
         bit = int(rng.integers(0, 64))
         if not eligible:
-            out.append((m.timestamp, order, m))
-            order += 1
+            out.append((i, m))
             continue
         if any(a <= r < b for a, b in sil):
             counts["silence"][key] += 1
             continue
         if i in skip:
-            out.append((m.timestamp, order, m))
-            order += 1
+            out.append((i, m))
             continue
         kind = next((k for k in KINDS if any(a <= r < b for a, b in windows.get(k, ()))), None)
         if kind is None:
@@ -109,6 +114,8 @@ def inject(
                 if u < acc:
                     kind = k
                     break
+        if kind in ("corrupt", "truncate") and (m.is_remote_frame or not m.data):
+            kind = None  # no payload to flip a bit in or to cut
         if kind == "reorder":
             j = next((j for j in range(i + 1, len(msgs)) if msgs[j].arbitration_id == m.arbitration_id), None)
             if j is None:
@@ -126,19 +133,21 @@ def inject(
             m = _copy(m, data=bytes(d))
         elif kind == "truncate":
             m = _copy(m, data=bytes(m.data[:-1]))
-        elif kind == "delay":
+        place = float(i)
+        if kind == "delay":
             m = _copy(m, t=m.timestamp + delay_s)
-        out.append((m.timestamp, order, m))
-        order += 1
+            j = i + 1  # after the frames sent before it is now due (up to a step back of the clock)
+            while j < len(msgs) and msgs[i].timestamp <= msgs[j].timestamp <= m.timestamp:
+                j += 1
+            place = j - 0.5
+        out.append((place, m))
         if kind == "duplicate":
-            out.append((m.timestamp + 0.001, order, _copy(m, t=m.timestamp + 0.001)))
-            order += 1
+            out.append((i + 0.25, _copy(m, t=m.timestamp + 0.001)))
         elif kind == "unknown":
             x = can.Message(timestamp=m.timestamp + 0.0005, arbitration_id=unknown_id, data=bytes(8),
                             is_extended_id=False, is_rx=False, channel=m.channel)
-            out.append((x.timestamp, order, x))
-            order += 1
-    out.sort(key=lambda e: (e[0], e[1]))
+            out.append((i + 0.5, x))
+    out.sort(key=lambda e: e[0])  # stable: frames at one place keep their order
     report = {
         "frames_in": len(msgs),
         "frames_out": len(out),
@@ -147,7 +156,7 @@ def inject(
         "totals": {k: sum(v.values()) for k, v in counts.items()},
         "silence_windows": [[round(a, 6), round(b, 6)] for a, b in sorted(sil)],
     }
-    return [e[2] for e in out], report
+    return [e[1] for e in out], report
 
 
 class SendError(Exception):
@@ -230,7 +239,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also send the log's error frames (not sent by default, as python-can's player)")
     p.add_argument("-o", "--out", help="also write the faulted stream to this log ('-': candump text on stdout)")
     p.add_argument("--seed", type=int, default=1, help="fault RNG seed (1)")
-    p.add_argument("--ids", type=_ids, help="IDs subject to faults, e.g. 0x100,0x101 (default all)")
+    p.add_argument("--ids", type=cli.parse_ids,
+                   help="IDs subject to faults, e.g. 0x100,0x101 (default all); above 0x7FF: 29-bit IDs")
     for k in KINDS:
         p.add_argument(f"--{k}", type=float, default=0.0, metavar="P", help=f"{k}: probability per frame")
         p.add_argument(f"--{k}-window", type=_window, action="append", default=[], metavar="START:END",
@@ -240,7 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--silence-rate", type=float, default=0.0, help="random silences: starts per second")
     p.add_argument("--silence-len", type=float, default=2.0, help="length of a random silence, s (2)")
     p.add_argument("--delay-s", type=float, default=0.25, help="delay of a delayed frame, s (0.25)")
-    p.add_argument("--unknown-id", type=lambda s: int(s, 0), default=0x7F0, help="ID of injected unknown frames (0x7F0)")
+    p.add_argument("--unknown-id", type=_std_id, default=0x7F0, help="11-bit ID of injected unknown frames (0x7F0)")
     cli.add_json_argument(p, "--report", default=" (default: stdout, or stderr when -o is '-')")
     cli.add_progress_argument(p)
     return p

@@ -19,7 +19,6 @@ import argparse
 import csv
 import io
 import json
-import math
 import re
 import sys
 from pathlib import Path
@@ -30,7 +29,7 @@ import numpy as np
 from . import cli, e2e, runconfig
 from .frames import (BAND_SPEEDS_KMH, EST_BAND, EST_QUALITY, EST_STATE, EST_THETA, EST_TYPE, FIT_NAMES,
                      FIX_TIME_WRAP_MS, HEALTH_RX, HEALTH_SYS, HEALTH_TIME, POSITION, STATUS_NAMES, TYPE_CUSTOM,
-                     TYPE_NONE, FrameCodec, type_name)
+                     TYPE_NONE, FrameCodec, is_hstpf_frame, type_name)
 from .model import Theta
 
 V_GRID_KMH = np.arange(0.0, 351.0, 1.0)
@@ -45,6 +44,10 @@ def read_truth(path: str) -> Dict[str, np.ndarray]:
     rows = list(csv.DictReader(io.StringIO(cli.read_text(path))))
     if not rows:
         raise ValueError(f"{path}: no rows")
+    cols = ("time_s", "position_m", "speed_mps", "type", "c0", "c1", "c2")
+    for n, r in enumerate(rows, start=2):  # line 1 is the header
+        if any(r.get(k) in (None, "") for k in cols):  # a file cut short ends in a partial row
+            raise ValueError(f"line {n} has no {next(k for k in cols if r.get(k) in (None, ''))}")
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
@@ -74,7 +77,9 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # An output frame long after the latest input (the inputs ended, or a
     # silence) holds a prediction, not the estimate at that input's time:
     # with inputs alignment it cannot be timed, so it is not scored.
-    in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map]
+    foreign = 0  # 29-bit frames: never ours, whatever their ID (as hstpfd)
+    in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map
+             and is_hstpf_frame(m)]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
     # For dating by EstTime when nothing else does: simulation seconds per
@@ -83,7 +88,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # on the receive time less the latest fix's latency, so a prediction
     # lies near the latest input's time plus the bus time since it, at that rate.
     in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
-                       if m.arbitration_id == pos_id and bytes(m.data) in input_map])
+                       if m.arbitration_id == pos_id and bytes(m.data) in input_map and is_hstpf_frame(m)])
     rate = speed if speed is not None else 1.0
     if speed is None and len(in_ts) > 10:
         d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
@@ -105,7 +110,12 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         series[name].append((t, sig))
 
     for m in rec_msgs:
-        if m.is_error_frame:
+        if not is_hstpf_frame(m):  # a remote or CAN FD frame with one of our IDs: hstpfd's format error
+            foreign += int(m.is_extended_id and not m.is_error_frame)
+            name = None if m.is_extended_id or m.is_error_frame else codec.message_name(m.arbitration_id)
+            if name is not None and name != POSITION and OUTPUT_SENDER in (codec.message(name).senders or ()):
+                e2e_results.setdefault(name, {}).setdefault("format", 0)
+                e2e_results[name]["format"] += 1
             continue
         if m.arbitration_id == pos_id:
             t = input_map.get(bytes(m.data))
@@ -167,6 +177,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     if pending is not None:
         keep(EST_STATE, *pending)
     series["dated_by_est_time"] = n_dated
+    series["ignored_29bit_frames"] = foreign
     return series, e2e_results
 
 
@@ -176,11 +187,11 @@ def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
     per fix-clock second (1 / replay speed) and the receive jitter, in ms of
     the fix clock (the error a receiver that dates fixes on receipt makes).
     Only E2E-accepted frames count."""
-    codec = FrameCodec(dbc, timeout_s=math.inf)
+    codec = FrameCodec(dbc)
     pos_id = codec.message(POSITION).frame_id
     rx, fix = [], []
     for m in rec_msgs:
-        if m.arbitration_id != pos_id or m.is_error_frame:
+        if m.arbitration_id != pos_id or not is_hstpf_frame(m):
             continue
         _, sig, _ = codec.decode(m.arbitration_id, bytes(m.data), now=m.timestamp)
         if sig is not None and sig.get("FixTimeValid", 0) >= 0.5 and sig["PosValid"] >= 0.5:
@@ -284,8 +295,9 @@ def metrics(series, truth) -> dict:
         true = np.array([th_true.c0, th_true.c1, th_true.c2])
         e = np.array([est.c0, est.c1, est.c2])
         res["final_theta"] = e.tolist()
-        res["theta_rel_err"] = ((e - true) / true).tolist()
-        res["w_rms_rel_err"] = w_rms_rel(est, th_true)
+        with np.errstate(divide="ignore", invalid="ignore"):  # a zero true coefficient: inf (null in the JSON)
+            res["theta_rel_err"] = ((e - true) / true).tolist()
+            res["w_rms_rel_err"] = w_rms_rel(est, th_true)
         band = band_at(series, t_last)
         if band is not None:
             # the final band around the final W(v): the share of 0..350 km/h where it holds the truth
@@ -298,7 +310,9 @@ def metrics(series, truth) -> dict:
         if decision is not None:
             after = np.array([[s["C0"], s["C1"], s["C2"]] for t, s in thf if t >= decision])
             if len(after):
-                res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true), axis=0).tolist()
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    res["theta_max_abs_rel_err_after_decision"] = np.max(np.abs((after - true) / true),
+                                                                         axis=0).tolist()
     for name in (HEALTH_RX, HEALTH_SYS, HEALTH_TIME):
         if series[name]:
             s = series[name][-1][1]
@@ -514,7 +528,7 @@ def _main(argv) -> int:
     if [a.log, a.input_log, a.truth].count("-") > 1:
         raise cli.CliError(cli.EXIT_USAGE, "only one input can be '-'")
     try:
-        codec = FrameCodec(a.dbc, timeout_s=math.inf)
+        codec = FrameCodec(a.dbc)  # each frame's receiver as the DBC has it: a restart after a silence is no jump
     except Exception as exc:  # missing or unreadable DBC
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
     input_map: Dict[bytes, float] = {}
@@ -523,7 +537,7 @@ def _main(argv) -> int:
         pos_id = codec.message(POSITION).frame_id
         t_first = inp[0].timestamp if inp else 0.0
         for m in inp:
-            if m.arbitration_id == pos_id:
+            if m.arbitration_id == pos_id and is_hstpf_frame(m):
                 input_map.setdefault(bytes(m.data), m.timestamp - t_first)
     try:
         truth = read_truth(a.truth)
@@ -531,11 +545,18 @@ def _main(argv) -> int:
         raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
     rec = cli.load_log(a.log)
     series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
+    times = [t for k, v in series.items() if isinstance(v, list) for t, _ in v]
+    tt = truth["time_s"]
+    if times and not any(tt[0] - 1.0 <= t <= tt[-1] + 1.0 for t in times):
+        raise cli.CliError(cli.EXIT_NO_TRAFFIC, f"no estimator frame of {a.log} falls within the truth's "
+                           f"{tt[0]:g}-{tt[-1]:g} s (they lie at {min(times):.6g}-{max(times):.6g} s): "
+                           "pass --t0 (the log time of simulation time 0) or --input-log")
     res = metrics(series, truth)
     res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
     res["output_e2e"] = e2e_res
     res["state_frames_dated"] = series.pop("dated_by_est_time")
+    res["ignored_29bit_frames"] = series.pop("ignored_29bit_frames")
     res["frames"] = {k: len(v) for k, v in series.items()}
     if a.plots:
         try:
