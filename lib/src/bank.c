@@ -97,6 +97,8 @@ static void reset_state(hstpf_t *f)
     f->ever_locked = 0;
     f->acquisitions = 0;
     f->nonfinite_resets = 0;
+    f->backward = 0;
+    f->top_m = -HUGE_VAL;
     f->standstill = 0;
     f->weights_wait = 0;
     f->arrival_s = 0.0;
@@ -437,7 +439,14 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
     }
     hstpf__update_declaration(f, in->dt_s, weigh);
-    hstpf__rebase(f);
+    {
+        const double rel = hstpf__blended_position(f, 0.0); /* one blend for both (soft-float exp on the M4F) */
+        const double s_m = f->origin_m + rel;
+        hstpf__rebase(f, rel);
+        if (has_y && hstpf__ran_backwards(f, s_m)) {
+            return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
+        }
+    }
     if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {
         ++f->reacquired;
         f->lost_run = 0;

@@ -280,6 +280,7 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->outliers = f->outliers;
     out->reacquired = f->reacquired;
     out->acquisitions = f->acquisitions;
+    out->backward = f->backward;
     out->nonfinite_resets = f->nonfinite_resets;
     /* a gated last fix: the fixes and the estimate disagree beyond the
      * gate (a reference jump, or a time base that stepped), so the estimate

@@ -17,6 +17,14 @@
  * configuration takes (dt_nominal_s, max_gap_s). */
 #define ACQ_T12_MIN 1e-6
 
+/* How far two fixes of a train at rest lie apart at most but in about 2 of
+ * 1000 pairs: the fix noise's 2^-10 .. 1 - 2^-10 quantile range. */
+static double fix_range(const hstpf_t *f)
+{
+    const int k = HSTPF_DIST_TAILN - 3; /* F^-1(2^(k - 32)) = F^-1(2^-10) */
+    return (double)f->de.qt.tail_hi[k] - (double)f->de.qt.tail_lo[k];
+}
+
 /* Lock from fixes: with a configured speed prior the first fix starts the
  * filter; otherwise, and whenever the lock is regained (the prior speaks of
  * the start: a train stopped at power-up may be at speed after an outage),
@@ -31,7 +39,12 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     q.t12 = 0.0;
     if (f->cfg.init_speed_sd <= 0.0 || f->ever_locked) {
         const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
-        if (!f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
+        /* a train does not run backwards: fixes that credibly do, against
+         * each other or behind the furthest the estimate has been, are a
+         * reference that falls in the direction of travel (hstpf.h) */
+        const int back = f->have_pend && (y - f->pend_y < -fix_range(f) || y < f->top_m - fix_range(f));
+        f->backward += (uint32_t)back;
+        if (back || !f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
             f->have_pend = 1;
             f->pend_y = y;
@@ -64,6 +77,26 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     return 1;
 }
 
+/* After a step on a fix: the posterior position went back more than a
+ * fix range behind the furthest it reached on a fix (at rest it averages
+ * many fixes, and the model never moves it back), so the fixes run
+ * backwards: the lock is dropped (the estimate goes invalid) until fixes
+ * come forward past that point again (hstpf__acquire). s: the blended
+ * position, absolute m. Returns 1 when dropped. */
+int hstpf__ran_backwards(hstpf_t *f, double s)
+{
+    if (s >= f->top_m) {
+        f->top_m = s;
+        return 0;
+    }
+    if (s >= f->top_m - fix_range(f)) {
+        return 0;
+    }
+    ++f->backward;
+    hstpf__drop_lock(f, 0);
+    return 1;
+}
+
 /* Drops the lock; the next fixes acquire again. keep_pend: the last fix
  * (a gated one) belongs to the new time base and may pair with the next. */
 void hstpf__drop_lock(hstpf_t *f, int keep_pend)
@@ -78,10 +111,10 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->lost_run = 0;
 }
 
-/* Keep float positions small: shift the origin by whole metres. */
-void hstpf__rebase(hstpf_t *f)
+/* Keep float positions small: shift the origin by whole metres (rel: the
+ * blended position from the origin). */
+void hstpf__rebase(hstpf_t *f, double rel)
 {
-    const double rel = hstpf__blended_position(f, 0.0);
     real d;
     if (fabs(rel) < REBASE_M) {
         return;
@@ -131,6 +164,7 @@ int32_t hstpf_reacquire(hstpf_t *f)
         return HSTPF_E_INIT;
     }
     hstpf__drop_lock(f, 0);
+    f->top_m = -HUGE_VAL; /* the caller's word: the reference may have turned round */
     return HSTPF_OK;
 }
 

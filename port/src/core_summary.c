@@ -97,8 +97,9 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     hstpfd__json_num(fp, LIB_HAS_SD ? e->position_sd_m : HUGE_VAL);
     fputs(",\"speed_sd_mps\":", fp);
     hstpfd__json_num(fp, LIB_HAS_SD ? (double)e->speed_sd_mps : HUGE_VAL);
-    fprintf(fp, ",\"standstill\":%u,\"acquisitions\":%lu,\"nonfinite_resets\":%lu", (unsigned)e->standstill,
-            (unsigned long)e->acquisitions, (unsigned long)e->nonfinite_resets);
+    fprintf(fp, ",\"standstill\":%u,\"acquisitions\":%lu,\"nonfinite_resets\":%lu,\"backward\":%lu",
+            (unsigned)e->standstill, (unsigned long)e->acquisitions, (unsigned long)e->nonfinite_resets,
+            (unsigned long)e->backward);
     fputs(",\"weights\":{", fp);
     for (l = 0; l < e->n_models; ++l) {
         if (l) {

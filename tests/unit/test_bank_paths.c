@@ -695,6 +695,56 @@ static void test_reset_is_a_new_start(void **state)
     }
 }
 
+/* ---- fixes that run backwards --------------------------------------------- */
+
+/* The model has no reversal, so position_m must grow in the direction of
+ * travel (hstpf.h). Fed kilometrage that falls as the train runs (at
+ * 60 m/s, and at 3 m/s, where one pair of fixes 1 s apart cannot tell it
+ * from the default noise, sd sqrt(5) m), every engine published a valid
+ * estimate at speed 0, 6-19 sd from the truth, re-acquiring over and over.
+ * Now no pair running back by more than the noise's 2^-10..1-2^-10 range
+ * (13.8 m here) locks, a lock whose posterior falls more than that behind
+ * the furthest it was is dropped, and nothing locks again until the fixes
+ * pass that point or the caller calls hstpf_reacquire(); a train at rest
+ * and one running forwards are not touched. */
+static void test_backward_fixes_not_valid(void **state)
+{
+    static const double speeds[4] = {-60.0, -3.0, 0.0, 60.0};
+    int i, j, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 4; ++j) {
+            hstpf_config_t c;
+            hstpf_estimate_t e;
+            int n_valid = 0, n_valid_late = 0;
+            base_config(&c, engines[i], 2);
+            start(&c);
+            for (k = 0; k < 300; ++k) {
+                const double u = speeds[j] > 0.0 ? hstpf_resistance(&rows[0], speeds[j]) : 0.0;
+                assert_int_equal(step(1.0, u, Y0 + speeds[j] * k + 2.0 * sin(1.7 * k), 1), HSTPF_OK);
+                e = est();
+                n_valid += e.valid;
+                n_valid_late += e.valid && k >= 30;
+            }
+            if (speeds[j] >= 0.0) {
+                assert_true(n_valid >= 298 && e.backward == 0u);
+                continue;
+            }
+            /* at 3 m/s the posterior needs about 5 s to fall 13.8 m behind */
+            assert_true(n_valid <= (speeds[j] < -10.0 ? 0 : 12));
+            assert_int_equal(n_valid_late, 0);
+            assert_true(e.backward >= 100u && !e.valid);
+            /* the caller's word that the reference turned: the next pair locks, once */
+            assert_int_equal(hstpf_reacquire(&f), HSTPF_OK);
+            for (k = 300; k < 303; ++k) {
+                assert_int_equal(step(1.0, 0.0, Y0 + speeds[j] * k, 1), HSTPF_OK);
+            }
+            /* 60 m back in a pair: refused again; 3 m: within the noise, tracked */
+            assert_true(est().valid == (speeds[j] > -10.0));
+        }
+    }
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -1042,6 +1092,7 @@ int main(void)
         cmocka_unit_test(test_valid_within_ranges),
         cmocka_unit_test(test_prior_only_at_start),
         cmocka_unit_test(test_reset_is_a_new_start),
+        cmocka_unit_test(test_backward_fixes_not_valid),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),

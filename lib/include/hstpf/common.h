@@ -4,7 +4,9 @@
  *
  * Every hstpf function that can fail returns an int32_t: HSTPF_OK (0) on
  * success or one of the negative HSTPF_E_* codes below. A function that
- * fails leaves every object it was given exactly as it was.
+ * fails leaves every object it was given exactly as it was, with one
+ * exception: hstpf_step()'s HSTPF_E_OUTLIER reports a step that WAS taken
+ * without its gated fix (do not repeat it).
  */
 #ifndef HSTPF_COMMON_H
 #define HSTPF_COMMON_H

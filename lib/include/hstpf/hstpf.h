@@ -336,7 +336,14 @@ typedef struct {
 typedef struct {
     double dt_s;         /**< step length T, (0, HSTPF_DT_MAX_S] */
     double traction;     /**< u over the step, N/kN (+ traction, - braking) */
-    double position_m;   /**< measured position y, m (if has_position) */
+    double position_m;   /**< measured position y, m (if has_position); it grows in the
+                              direction of travel (the model has no reversal): a unit on a line
+                              whose kilometrage falls that way feeds its negative, and calls
+                              hstpf_reacquire() when the train reverses. Fixes that run
+                              backwards are not tracked: they hold the estimate invalid until
+                              they come forward again past where they turned, or until
+                              hstpf_reacquire() (the estimate's backward counts them). Each
+                              fix once: one fed twice counts as two independent ones. */
     uint8_t has_position; /**< 0: no measurement this step, predict only */
 } hstpf_input_t;
 
@@ -418,6 +425,8 @@ typedef struct {
     uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
     uint32_t acquisitions;  /**< lock (re)acquired from fixes: start, outage, gated run, time step */
     uint32_t nonfinite_resets; /**< times the filter went non-finite and was re-initialised */
+    uint32_t backward;      /**< fix pairs refused, and locks dropped, because the fixes ran
+                                 backwards (position_m must grow in the direction of travel) */
     uint16_t n_models;
     hstpf_model_out_t model[HSTPF_MAX_MODELS];
 } hstpf_estimate_t;
@@ -579,6 +588,8 @@ typedef struct {
     double pend_y;                   /* that fix, absolute m */
     double pend_age_s;               /* time since it */
     uint32_t acquisitions, nonfinite_resets;
+    uint32_t backward;               /* fix pairs refused and locks dropped: the fixes ran backwards */
+    double top_m;                    /* furthest posterior position on a fix, absolute m (-inf: none) */
     hstpf_refine_t rf;
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
     uint8_t fit;
@@ -656,7 +667,9 @@ int32_t hstpf_reset(hstpf_t *f);
  * @brief Drops the lock: the filter re-acquires position and speed from the
  * next fixes (as at the start), keeping the model weights and the
  * declaration. For a caller that knows the time base broke (a receive-clock
- * step). The estimate reads valid = 0 until re-acquired.
+ * step), or that the position reference turned round (it also forgets how
+ * far the fixes had come, so fixes behind that point may lock again;
+ * hstpf_input_t.position_m). The estimate reads valid = 0 until re-acquired.
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(1).
  */
 int32_t hstpf_reacquire(hstpf_t *f);
@@ -682,8 +695,12 @@ int32_t hstpf_reacquire(hstpf_t *f);
  * HSTPF_GRID_NV x kernel taps), a few log() per model, bounded, where the
  * grid models are min(cfg.grid_rows, n_models) under Gaussian process
  * noise (plus a Kalman step per row), every row otherwise, and the
- * continuous hypothesis' grid if it has one (docs/grid.md measures it). Stack below 1 KiB (560 B measured on a Cortex-M4F
- * with libm, docs/footprint.md); no other memory.
+ * continuous hypothesis' grid if it has one (docs/grid.md measures it).
+ * The worst step costs a few times the median (a fix far off with a
+ * heavy-tailed noise table, a step near max_gap_s; docs/footprint.md).
+ * Stack: 1 152 B painted on a Cortex-M4F with libm, the largest engine
+ * (budgeted at 1 240 B in the cross test; up to about 1.3 KiB on x86-64);
+ * no other memory.
  */
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in);
 
