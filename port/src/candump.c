@@ -274,10 +274,7 @@ int hstpfd_candump_sniff(const char *head, size_t n, const char *name, char *msg
     const char *what = NULL;
     char first[sizeof line] = "";
 
-    if (memchr(head, '\0', n) != NULL) {
-        what = other_format(head, n, "");
-    }
-    while (what == NULL && i < n) {
+    while (i < n) { /* a NUL in a log with frames is a bad line, not a binary file */
         const char *nl = memchr(head + i, '\n', n - i);
         size_t k;
         hstpfd_frame_t f;
@@ -302,12 +299,10 @@ int hstpfd_candump_sniff(const char *head, size_t n, const char *name, char *msg
             }
         }
     }
-    if (what == NULL) {
-        if (data_lines == 0) {
-            return 0; /* empty, comments only, or not decided within the head */
-        }
-        what = other_format(head, n, first);
+    if (data_lines == 0 && memchr(head, '\0', n) == NULL) {
+        return 0; /* empty, comments only, or not decided within the head */
     }
+    what = other_format(head, n, first); /* no frame: NUL bytes say binary */
     if (msg != NULL && msg_size > 0) {
         (void)snprintf(msg, msg_size,
                        "%s is not a candump log (format: %s); convert it first: "

@@ -10,6 +10,10 @@ int hstpfd_config_finish(hstpfd_config_t *c, char *err, size_t err_size)
         hstpfd__fail(err, err_size, "give exactly one source: --iface IFACE or --log FILE");
         return -1;
     }
+    if (c->sched.step_period_s > 0.0 && c->sched.step_period_s < 1e-6) { /* time is counted in whole us */
+        hstpfd__fail(err, err_size, "step_period_s: %g is neither 0 nor at least 1e-6 s", c->sched.step_period_s);
+        return -1;
+    }
     c->sched.mass_t = c->mass_t;
     c->sched.first_dt_s = c->dt_nominal_s;
     if (hstpfd_sched_init(&s, &c->sched, NULL, NULL) != 0) {

@@ -102,14 +102,28 @@ int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t e
         hstpfd__fail(err, err_size, "%s: %s", path, strerror(errno));
         return -1;
     }
-    while (fgets(line, sizeof line, fp) != NULL) {
+    for (;;) {
+        const char *nl, *text = line;
+        memset(line, 0, sizeof line); /* so that a NUL inside a line can be told from its end */
+        if (fgets(line, sizeof line, fp) == NULL) {
+            break;
+        }
         ++lineno;
-        if (strchr(line, '\n') == NULL && !feof(fp)) {
+        nl = memchr(line, '\n', sizeof line);
+        if (nl == NULL && !feof(fp)) {
             hstpfd__fail(err, err_size, "%s:%u: line too long", path, lineno);
             (void)fclose(fp);
             return -1;
         }
-        if (hstpfd_config_line(c, line, e, sizeof e) != 0) {
+        if (nl != NULL && strlen(line) < (size_t)(nl - line)) {
+            hstpfd__fail(err, err_size, "%s:%u: a NUL byte in the line", path, lineno);
+            (void)fclose(fp);
+            return -1;
+        }
+        if (lineno == 1u && memcmp(line, "\xEF\xBB\xBF", 3) == 0) {
+            text += 3; /* the UTF-8 byte-order mark an editor may write */
+        }
+        if (hstpfd_config_line(c, text, e, sizeof e) != 0) {
             hstpfd__fail(err, err_size, "%s:%u: %s", path, lineno, e);
             (void)fclose(fp);
             return -1;

@@ -25,12 +25,15 @@ typedef enum {
     K_RXFILTER
 } hstpfd__ktype_t;
 
+#define HSTPFD_LO_OPEN 1
+#define HSTPFD_HI_OPEN 2
+
 typedef struct {
     const char *name;
     hstpfd__ktype_t type;
     size_t off;
     double lo, hi;
-    int lo_open; /* lo excluded */
+    int open; /* HSTPFD_LO_OPEN: lo excluded; HSTPFD_HI_OPEN: hi excluded */
     const char *help;
 } hstpfd__key_t;
 

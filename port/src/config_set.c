@@ -194,12 +194,14 @@ int hstpfd_parse_models(hstpfd_config_t *c, const char *text, char *err, size_t 
             }
             continue;
         }
-        nf = split(name, ':', f, 5);
         {
             double c0, c1, c2;
+            char whole[96]; /* the entry as given, for the message: split() cuts it up */
+            (void)snprintf(whole, sizeof whole, "%s", name);
+            nf = split(name, ':', f, 5);
             if (nf != 4 || num(hstpfd__trim(f[1]), &c0) != 0 || num(hstpfd__trim(f[2]), &c1) != 0 ||
                 num(hstpfd__trim(f[3]), &c2) != 0) {
-                hstpfd__fail(err, err_size, "models: custom entry '%s' must be name:c0:c1:c2", item[i]);
+                hstpfd__fail(err, err_size, "models: custom entry '%s' must be name:c0:c1:c2", whole);
                 return -1;
             }
             if (!(c0 >= 0.0 && c0 <= HSTPF_C0_MAX) || !(c1 >= 0.0 && c1 <= HSTPF_C1_MAX) ||
@@ -303,8 +305,10 @@ int hstpfd_config_set(hstpfd_config_t *c, const char *key, const char *value, ch
             hstpfd__fail(err, err_size, "%s: '%s' is not a number", key, v);
             return -1;
         }
-        if (x > k->hi || x < k->lo || (k->lo_open && x == k->lo)) {
-            hstpfd__fail(err, err_size, "%s: %s is outside %c%g, %g]", key, v, k->lo_open ? '(' : '[', k->lo, k->hi);
+        if (x > k->hi || x < k->lo || ((k->open & HSTPFD_LO_OPEN) && x == k->lo) ||
+            ((k->open & HSTPFD_HI_OPEN) && x == k->hi)) {
+            hstpfd__fail(err, err_size, "%s: %s is outside %c%g, %g%c", key, v, (k->open & HSTPFD_LO_OPEN) ? '(' : '[',
+                         k->lo, k->hi, (k->open & HSTPFD_HI_OPEN) ? ')' : ']');
             return -1;
         }
         memcpy(base + k->off, &x, sizeof x);

@@ -47,19 +47,59 @@ const char *hstpfd__fit_name(hstpf_fit_t fit)
     return fit == HSTPF_FIT_TABLE ? "table" : fit == HSTPF_FIT_NONE ? "none" : "unknown";
 }
 
+/* Bytes of the well-formed UTF-8 sequence at s (RFC 3629: no overlong
+ * form, no surrogate, at most U+10FFFF), 0 if there is none. */
+static size_t utf8_len(const unsigned char *s)
+{
+    size_t n, i;
+    unsigned long cp;
+    if (s[0] < 0x80u) {
+        return 1;
+    }
+    if (s[0] >= 0xC2u && s[0] <= 0xDFu) {
+        n = 2;
+        cp = s[0] & 0x1Fu;
+    } else if (s[0] >= 0xE0u && s[0] <= 0xEFu) {
+        n = 3;
+        cp = s[0] & 0x0Fu;
+    } else if (s[0] >= 0xF0u && s[0] <= 0xF4u) {
+        n = 4;
+        cp = s[0] & 0x07u;
+    } else {
+        return 0;
+    }
+    for (i = 1; i < n; ++i) {
+        if ((s[i] & 0xC0u) != 0x80u) { /* also a NUL: the string ends inside it */
+            return 0;
+        }
+        cp = (cp << 6) | (s[i] & 0x3Fu);
+    }
+    if ((n == 3 && (cp < 0x800u || (cp >= 0xD800u && cp <= 0xDFFFu))) || (n == 4 && (cp < 0x10000u || cp > 0x10FFFFu))) {
+        return 0;
+    }
+    return n;
+}
+
+/* A JSON string; a byte that is not well-formed UTF-8 (a Latin-1 file
+ * name) is written as U+FFFD, so that the output stays UTF-8 JSON. */
 void hstpfd__json_str(FILE *fp, const char *s)
 {
+    const unsigned char *p = (const unsigned char *)s;
     fputc('"', fp);
-    for (; *s != '\0'; ++s) {
-        const unsigned char ch = (unsigned char)*s;
-        if (ch == '"' || ch == '\\') {
+    while (*p != '\0') {
+        const size_t n = utf8_len(p);
+        if (*p == '"' || *p == '\\') {
             fputc('\\', fp);
-            fputc(ch, fp);
-        } else if (ch < 0x20u) {
-            fprintf(fp, "\\u%04x", (unsigned)ch);
+            fputc(*p, fp);
+        } else if (*p < 0x20u) {
+            fprintf(fp, "\\u%04x", (unsigned)*p);
+        } else if (n == 0) {
+            fputs("\\ufffd", fp);
         } else {
-            fputc(ch, fp);
+            (void)fwrite(p, 1, n, fp);
+            p += n - 1;
         }
+        ++p;
     }
     fputc('"', fp);
 }

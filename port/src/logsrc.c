@@ -10,30 +10,32 @@
 #define STOP_EVERY 65536L
 
 /* One line into line[size] (its newline dropped): 1, 0 at the end of the
- * input, -1 for a line longer than the buffer (the rest of it read and
- * dropped). By bytes, so a NUL inside a line ends only that line's text
- * (fgets' strchr could not tell it from the end and took the next line
- * for the rest of a long one); *stop is seen inside an endless line. */
+ * input, -1 for a bad line: longer than the buffer (the rest of it read and
+ * dropped) or with a NUL in it (docs/daemon.md; its text before the NUL
+ * could pass for a frame). By bytes, so a NUL inside a line ends only that
+ * line (fgets' strchr could not tell it from the end and took the next
+ * line for the rest of a long one); *stop is seen inside an endless line. */
 static int read_line(FILE *fp, char *line, size_t size, volatile sig_atomic_t *stop)
 {
     size_t k = 0;
     long seen = 0;
-    int ch, too_long = 0;
+    int ch, bad = 0;
     while ((ch = getc(fp)) != EOF && ch != '\n') {
+        bad |= ch == '\0';
         if (k + 1 < size) {
             line[k++] = (char)ch;
         } else {
-            too_long = 1;
+            bad = 1;
         }
         if (++seen % STOP_EVERY == 0 && *stop) {
             break;
         }
     }
     line[k] = '\0';
-    if (ch == EOF && k == 0 && !too_long) {
+    if (ch == EOF && k == 0 && !bad) {
         return 0;
     }
-    return too_long ? -1 : 1;
+    return bad ? -1 : 1;
 }
 
 int hstpfd_run_log(hstpfd_core_t *c, const char *path, volatile sig_atomic_t *stop, const char **end)

@@ -102,17 +102,22 @@ static int close_out(FILE *fp, const char *what)
     return 0;
 }
 
-/* The same file (by path, or by device and inode where it exists) */
+/* The same regular file (by path, or by device and inode where it exists);
+ * a device such as /dev/null may take any number of outputs */
 static int same_file(const char *a, const char *b)
 {
     struct stat sa, sb;
+    const int ea = stat(a, &sa) == 0, eb = stat(b, &sb) == 0;
     if (a[0] == '\0' || b[0] == '\0' || strcmp(a, "-") == 0 || strcmp(b, "-") == 0) {
         return 0; /* unset, or stdin / stdout */
+    }
+    if ((ea && !S_ISREG(sa.st_mode)) || (eb && !S_ISREG(sb.st_mode))) {
+        return 0;
     }
     if (strcmp(a, b) == 0) {
         return 1;
     }
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    return ea && eb && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
 /* The log and the outputs are distinct files: an output opened for writing
@@ -147,6 +152,7 @@ int main(int argc, char **argv)
     int i, print_config = 0, rc;
     FILE *out = NULL, *frames_out = NULL, *summary = NULL;
     const char *end = HSTPFD_END_ERROR;
+    int cli_source = 0; /* the source named on the command line: 1 iface, 2 log */
     struct sigaction sa;
 
     hstpfd_config_default(&cfg);
@@ -226,6 +232,16 @@ int main(int argc, char **argv)
             char m[HSTPFD_ERR_MAX];
             (void)snprintf(m, sizeof m, "%s needs a value", a);
             return bad(m);
+        }
+        if (strcmp(k, "iface") == 0 || strcmp(k, "log") == 0) {
+            /* the command line's source replaces the config file's (a live
+             * unit's file, run offline with --log); two on it are an error */
+            const int src = strcmp(k, "iface") == 0 ? 1 : 2;
+            if (cli_source != 0 && cli_source != src) {
+                return bad("give exactly one source: --iface IFACE or --log FILE");
+            }
+            cli_source = src;
+            (src == 1 ? cfg.log : cfg.iface)[0] = '\0';
         }
         if (hstpfd_config_set(&cfg, k, argv[++i], err, sizeof err) != 0) {
             char m[2 * HSTPFD_ERR_MAX];

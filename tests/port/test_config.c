@@ -237,6 +237,22 @@ static void test_file_and_write(void **state)
     fclose(fp);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
     assert_non_null(strstr(err, ":3: particles"));
+    /* a byte-order mark before the first key is skipped; a NUL is named */
+    fp = fopen(path, "wb");
+    assert_non_null(fp);
+    fputs("\xEF\xBB\xBFparticles = 12\n", fp);
+    fclose(fp);
+    assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), 0);
+    assert_int_equal(cfg.particles, 12);
+    fp = fopen(path, "wb");
+    assert_non_null(fp);
+    fputs("particles = 13\n", fp);
+    fputs("seed = 5", fp);
+    fputc('\0', fp);
+    fputs("7\n", fp);
+    fclose(fp);
+    assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
+    assert_non_null(strstr(err, ":2: a NUL byte"));
     remove(path);
     assert_int_equal(hstpfd_config_load(&cfg, "/nonexistent/x.ini", err, sizeof err), -1);
     assert_non_null(strstr(err, "/nonexistent/x.ini"));
@@ -253,12 +269,26 @@ static void test_finish(void **state)
     assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1); /* two */
     assert_int_equal(hstpfd_config_set(&cfg, "log", "", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), 0);
-    /* a value the key's own range takes and the library's does not: the
-     * library's refusal names the key (hstpf_config_check's field) */
-    assert_int_equal(hstpfd_config_set(&cfg, "declare_threshold", "1", err, sizeof err), 0);
-    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1);
+    /* the keys' ranges are the library's and the scheduler's: a value
+     * outside is refused where it is set, naming the key and the range (the
+     * finish's check said only "scheduling values out of range", or let the
+     * library refuse without the file's line) */
+    assert_int_equal(hstpfd_config_set(&cfg, "declare_threshold", "1", err, sizeof err), -1);
     assert_non_null(strstr(err, "declare_threshold"));
+    assert_non_null(strstr(err, "(0.5, 1)"));
     assert_int_equal(hstpfd_config_set(&cfg, "declare_threshold", "0.99", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_set(&cfg, "predict_period_s", "1e-9", err, sizeof err), -1);
+    assert_non_null(strstr(err, "predict_period_s"));
+    assert_int_equal(hstpfd_config_set(&cfg, "max_gap_s", "1e-9", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "dt_nominal_s", "1e-9", err, sizeof err), -1);
+    assert_int_equal(hstpfd_config_set(&cfg, "step_period_s", "1e-9", err, sizeof err), 0); /* 0 or >= 1e-6 */
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), -1);
+    assert_non_null(strstr(err, "step_period_s"));
+    assert_int_equal(hstpfd_config_set(&cfg, "step_period_s", "0", err, sizeof err), 0);
+    assert_int_equal(hstpfd_config_finish(&cfg, err, sizeof err), 0);
+    /* a custom model's message shows the entry as given */
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "a:b:1:0:0", err, sizeof err), -1);
+    assert_non_null(strstr(err, "'a:b:1:0:0'"));
     assert_int_equal(hstpfd_config_set(&cfg, "iface", "averyveryveryveryverylonginterfacename", err, sizeof err),
                      -1);
 }

@@ -458,6 +458,57 @@ static void test_files_and_lines(void **state)
     assert_int_equal((int)num("faults", "bad_lines"), 0);
 }
 
+/* What an operator's files hold (a review's findings): a NUL in the first
+ * 4 KiB of a log with frames took the whole log for a binary file (exit 1,
+ * no summary), and one after a frame's text let the line pass for a frame
+ * (docs/daemon.md: a line with a NUL in it is one bad line); /dev/null
+ * could not take two outputs; a live unit's file (iface set) could not run
+ * offline with --log; a name not in UTF-8 went raw into the JSON. */
+static void test_operator_files(void **state)
+{
+    FILE *in, *out, *cfgf;
+    int ch, k = 0;
+    const char *p;
+    (void)state;
+    in = fopen(DIR "/clean.log", "rb");
+    out = fopen(DIR "/nul.log", "wb");
+    assert_non_null(in);
+    assert_non_null(out);
+    while ((ch = fgetc(in)) != EOF) { /* a NUL line after the 20th, and the 40th's frame with a NUL and more */
+        if (ch == '\n' && k == 39) {
+            fputc('\0', out);
+            fputs(" garbage", out);
+        }
+        fputc(ch, out);
+        k += ch == '\n';
+        if (ch == '\n' && k == 20) {
+            fputc('\0', out);
+            fputc('\n', out);
+        }
+    }
+    fclose(in);
+    fclose(out);
+    assert_int_equal(run("--log " DIR "/nul.log " MODELS " --summary " DIR "/nul.json > /dev/null"), 0);
+    read_file(DIR "/nul.json", summary, sizeof summary);
+    assert_int_equal((int)num("faults", "bad_lines"), 2);
+    assert_int_equal((int)num("frames", "total"), 11999);
+    assert_int_equal(run("--log " DIR "/clean.log " MODELS " --out /dev/null --frames-out /dev/null > /dev/null"), 0);
+    cfgf = fopen(DIR "/live.ini", "w");
+    assert_non_null(cfgf);
+    fputs("\xEF\xBB\xBF# saved with a byte-order mark\n[input]\niface = vcan0\n", cfgf);
+    fclose(cfgf);
+    assert_int_equal(run("-c " DIR "/live.ini --log " DIR "/clean.log " MODELS " > /dev/null"), 0);
+    assert_int_equal(run("--iface vcan0 --log " DIR "/clean.log " MODELS " > /dev/null 2>&1"), 2);
+    assert_int_equal(run("--log " DIR "/clean.log --models 'Z\xFCrich:1:0.01:0.0001, CRH3' --mass-t 500 --summary " DIR
+                         "/u.json > /dev/null"),
+                     0);
+    read_file(DIR "/u.json", summary, sizeof summary);
+    assert_non_null(strstr(summary, "\"Z\\ufffdrich\""));
+    for (p = summary; *p != '\0'; ++p) {
+        assert_true((unsigned char)*p < 0x80u); /* a name with a valid sequence would keep it; this one has none */
+    }
+}
+
 /* A step per position frame (step_period_s 0) under 0-5 ms of receive
  * jitter: two steps fall within one EstState cycle now and then. The later
  * one's state used to be dropped (600 steps, 509 EstState frames; the bus
@@ -1239,6 +1290,7 @@ int main(void)
         cmocka_unit_test(test_outage_counter_in_sequence),
         cmocka_unit_test(test_extreme_time_scale),
         cmocka_unit_test(test_files_and_lines),
+        cmocka_unit_test(test_operator_files),
         cmocka_unit_test(test_clock_flapping),
         cmocka_unit_test(test_clock_step_forward_short),
         cmocka_unit_test(test_stalled_sender),
