@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/results: every Monte Carlo scenario (100 seeds each), the
 # journeys, the Case 2 ablation, and the figures (docs/results.md gives the
-# measured time). HSTPF_SEEDS sets every scenario's seeds (100);
+# time it took when last run whole). HSTPF_SEEDS sets most scenarios' seeds (100);
 # HSTPF_GRID17_SEEDS only those of issue 13's 17-model grid scenarios, the
 # slowest (default HSTPF_SEEDS).
 set -euo pipefail

@@ -105,9 +105,39 @@ def test_models_custom_bank(mc, tmp_path):
     (["--scenario", "absent", "--models", "CRH3"], "2 rows or more"),
     (["--scenario", "all17", "--models", "CRH1,crh1"], "twice"),
     (["--scenario", "all17", "--models", "CRH1,"], "empty"),
+    # values atoi/atof took (a review): each ran something else than asked
+    (["--scenario", "paper1", "--duration", "0"], "--duration: '0' is not a number from 1"),
+    (["--scenario", "paper1", "--duration", "nan"], "--duration: 'nan'"),
+    (["--scenario", "paper1", "--duration", "1e8"], "--duration: '1e8'"),
+    (["--scenario", "paper1", "--first-seed", "2147483647", "--seeds", "2"], "runs past seed"),
+    (["--scenario", "paper1", "--seeds", "1x"], "--seeds: '1x' is not a whole number"),
+    (["--scenario", "paper1", "--e-blur", "0.2x"], "--e-blur: '0.2x' is not a finite number"),
+    (["--scenario", "paper1", "--bank", "independnt"], "not paired or independent"),
+    (["--scenario", "paper1", "--resample", "alway"], "not always or ess"),
+    (["--scenario", "paper1", "--weights", "papers"], "not marginal or paper"),
+    (["--scenario", "paper1", "--particles", "65636"], "--particles: '65636'"),
+    (["--scenario", "paper1", "--json", "/nonexistent/x.json"], "--json /nonexistent/x.json"),
+    (["--scenario", "paper1", "--trace", "/nonexistent/t.csv"], "--trace /nonexistent/t.csv"),
+    (["--scenario", "paper1", "--first-seed", "5", "--trace-seed", "2", "--trace", "t.csv"], "not among the seeds"),
 ])
-def test_bad_command_lines_say_why(mc, args, says):
-    """A bad command line exits 2 with its reason on stderr, not the bare usage."""
-    r = subprocess.run([mc, *args, "--seeds", "1"], capture_output=True, text=True)
+def test_bad_command_lines_say_why(mc, args, says, tmp_path):
+    """A bad command line exits 2 with its reason on stderr, not the bare
+    usage, and before any run (an unwritable --json lost the whole study)."""
+    seeds = [] if "--seeds" in args else ["--seeds", "1"]
+    r = subprocess.run([mc, *args, *seeds], capture_output=True, text=True, cwd=tmp_path, timeout=20)
     assert r.returncode == 2
     assert says in r.stderr and r.stderr.startswith("hstpf-mc: ")
+
+
+def test_trace_has_y_is_what_the_filter_got(mc, tmp_path):
+    """The trace's has_y is the fix the filter was given: during the
+    outage scenario's 57 s without fixes it read 1 (the simulator's sample).
+    Without --trace-seed the trace is of the first seed run."""
+    t = tmp_path / "o.csv"
+    subprocess.run([mc, "--scenario", "outage", "--truth", "CRH1", "--first-seed", "3", "--seeds", "1",
+                    "--threads", "1", "--trace", str(t)], capture_output=True, text=True, check=True, timeout=300)
+    rows = t.read_text().splitlines()
+    head = rows[0].split(",")
+    has_y = [int(r.split(",")[head.index("has_y")]) for r in rows[1:]]
+    assert 50 <= has_y.count(0) <= 120  # the outage's steps
+    assert has_y[0] == 1 and has_y[-1] == 1

@@ -219,7 +219,9 @@ def studies(d: Path) -> str:
     for s in ["paper1", "all17", "stops"]:
         f = d / f"{s}-norefine.txt"
         if f.exists():
-            line = f.read_text().strip().splitlines()[-1]
+            lines = f.read_text().strip().splitlines()
+            # the journeys' summary line, not the split by distance that follows it
+            line = next((ln for ln in reversed(lines) if ln.startswith("trains off the table:")), lines[-1])
             out.append(f"| `{s} --no-refine` | {line} |")
     return "\n".join(out)
 

@@ -7,6 +7,8 @@
 #define _POSIX_C_SOURCE 200112L
 
 #include <ctype.h>
+#include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -689,7 +691,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             /* the truth, inputs and fixes to a micrometre: a one-sided noise's
              * density changes within a millimetre (tools/figures/oracle_case2.py) */
             fprintf(trace, "%.0f,%.6f,%.6f,%.6f,%.6f,%d,%.3f,%.4f,%.5f,%.6f,%.8f,%d,%d,%d,%d,%.3f,%.4f", smp.t,
-                    smp.s, smp.v, smp.u, smp.y, smp.has_y, est.position_m, (double)est.speed_mps,
+                    smp.s, smp.v, smp.u, smp.y, (int)in.has_position, est.position_m, (double)est.speed_mps,
                     (double)est.theta[0], (double)est.theta[1], (double)est.theta[2], est.declared,
                     (int)est.status, est.standstill, est.valid, est.position_sd_m, (double)est.speed_sd_mps);
             for (k = 0; k < w->n_models; ++k) {
@@ -1336,6 +1338,55 @@ static int bad(const char *fmt, ...)
     return 2;
 }
 
+/* Option a's value v as a whole integer in [lo, hi] (atoi took "1x",
+ * wrapped 65636 particles to 100 and 2^31 seeds to a negative). */
+static int int_arg(const char *a, const char *v, long lo, long hi, long *out)
+{
+    char *end;
+    long x;
+    errno = 0;
+    x = strtol(v, &end, 10);
+    if (end == v || *end != '\0' || errno == ERANGE || x < lo || x > hi) {
+        (void)bad("%s: '%s' is not a whole number from %ld to %ld", a, v, lo, hi);
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+/* Option a's value v as a whole finite number in [lo, hi]. */
+static int num_arg(const char *a, const char *v, double lo, double hi, double *out)
+{
+    char *end;
+    double x;
+    errno = 0;
+    x = strtod(v, &end);
+    if (end == v || *end != '\0' || errno == ERANGE || !(x >= lo && x <= hi)) {
+        if (lo <= -1e300) { /* the library's configuration check holds its range */
+            (void)bad("%s: '%s' is not a finite number", a, v);
+        } else {
+            (void)bad("%s: '%s' is not a number from %g to %g", a, v, lo, hi);
+        }
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+/* Option a's value v, one of the n names: its index, else -1 (a typo fell
+ * to the other choice: --bank independnt ran the paired bank). */
+static int choice_arg(const char *a, const char *v, const char *const *names, int n)
+{
+    int k;
+    for (k = 0; k < n; ++k) {
+        if (!strcmp(v, names[k])) {
+            return k;
+        }
+    }
+    (void)bad("%s: '%s' is not %s or %s", a, v, names[0], names[1]);
+    return -1;
+}
+
 /* Names compare without case: --truth crh3 is CRH3 (as hstpf-simulate). */
 static int same_name(const char *a, const char *b)
 {
@@ -1495,6 +1546,8 @@ int main(int argc, char **argv)
     const char *scen = NULL, *json = NULL, *truth_name = NULL, *models_list = NULL;
     int seeds = 100, threads = 2, i, j, n_models;
     double duration = -1.0;
+    long lv = 0;
+    int trace_seed_set = 0;
     pthread_t th[16];
     FILE *jf = NULL;
     int tot_s = 0, tot_f = 0, tot_w = 0, progress = isatty(2);
@@ -1551,17 +1604,33 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--models")) {
             models_list = v;
         } else if (!strcmp(a, "--seeds")) {
-            seeds = atoi(v);
+            if (int_arg(a, v, 1, 10000000, &lv) != 0) {
+                return 2;
+            }
+            seeds = (int)lv;
         } else if (!strcmp(a, "--refine-prior")) {
-            st.base.refine_prior_q = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.refine_prior_q) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--grid-rows")) {
-            st.base.grid_rows = (uint16_t)atoi(v);
+            if (int_arg(a, v, 0, HSTPF_MAX_MODELS, &lv) != 0) {
+                return 2;
+            }
+            st.base.grid_rows = (uint16_t)lv;
         } else if (!strcmp(a, "--refine-spread")) {
-            st.base.refine_spread = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.refine_spread) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--threads")) {
-            threads = atoi(v);
+            if (int_arg(a, v, 1, 16, &lv) != 0) {
+                return 2;
+            }
+            threads = (int)lv;
         } else if (!strcmp(a, "--duration")) {
-            duration = atof(v);
+            /* at most 1e6 s: beyond it the simulated train runs past the library's position range */
+            if (num_arg(a, v, 1.0, 1e6, &duration) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--truth")) {
             truth_name = v;
         } else if (!strcmp(a, "--json")) {
@@ -1569,9 +1638,16 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--trace")) {
             w.trace_path = v;
         } else if (!strcmp(a, "--first-seed")) {
-            w.first_seed = atoi(v);
+            if (int_arg(a, v, 1, INT_MAX, &lv) != 0) {
+                return 2;
+            }
+            w.first_seed = (int)lv;
         } else if (!strcmp(a, "--trace-seed")) {
-            w.trace_seed = atoi(v);
+            if (int_arg(a, v, 1, INT_MAX, &lv) != 0) {
+                return 2;
+            }
+            w.trace_seed = (int)lv;
+            trace_seed_set = 1;
         } else if (!strcmp(a, "--engine")) {
             if (!strcmp(v, "auto")) {
                 st.base.engine = HSTPF_ENGINE_AUTO;
@@ -1585,34 +1661,72 @@ int main(int argc, char **argv)
                 return bad("--engine: '%s' is not auto, particle, kalman or grid", v);
             }
         } else if (!strcmp(a, "--particles")) {
-            st.base.n_particles = (uint16_t)atoi(v);
+            if (int_arg(a, v, 2, HSTPF_MAX_PARTICLES, &lv) != 0) {
+                return 2;
+            }
+            st.base.n_particles = (uint16_t)lv;
         } else if (!strcmp(a, "--resample")) {
-            st.base.resample = !strcmp(v, "always") ? HSTPF_RESAMPLE_ALWAYS : HSTPF_RESAMPLE_ESS;
+            static const char *const names[2] = {"always", "ess"};
+            const int k = choice_arg(a, v, names, 2);
+            if (k < 0) {
+                return 2;
+            }
+            st.base.resample = k == 0 ? HSTPF_RESAMPLE_ALWAYS : HSTPF_RESAMPLE_ESS;
         } else if (!strcmp(a, "--ess")) {
-            st.base.ess_threshold = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.ess_threshold) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--bank")) {
-            st.base.bank = !strcmp(v, "independent") ? HSTPF_BANK_INDEPENDENT : HSTPF_BANK_PAIRED;
+            static const char *const names[2] = {"paired", "independent"};
+            const int k = choice_arg(a, v, names, 2);
+            if (k < 0) {
+                return 2;
+            }
+            st.base.bank = k == 1 ? HSTPF_BANK_INDEPENDENT : HSTPF_BANK_PAIRED;
         } else if (!strcmp(a, "--rough")) {
-            st.base.roughening_k = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.roughening_k) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--rough-min-s")) {
-            st.base.rough_min_s = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.rough_min_s) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--rough-min-v")) {
-            st.base.rough_min_v = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.rough_min_v) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--weights")) {
-            st.base.weight_method = !strcmp(v, "paper") ? HSTPF_WEIGHT_PAPER : HSTPF_WEIGHT_MARGINAL;
+            static const char *const names[2] = {"marginal", "paper"};
+            const int k = choice_arg(a, v, names, 2);
+            if (k < 0) {
+                return 2;
+            }
+            st.base.weight_method = k == 1 ? HSTPF_WEIGHT_PAPER : HSTPF_WEIGHT_MARGINAL;
         } else if (!strcmp(a, "--q-floor")) {
-            st.base.q_floor = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.q_floor) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--hold")) {
-            st.base.declare_hold_s = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.declare_hold_s) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--threshold")) {
-            st.base.declare_threshold = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.declare_threshold) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--floor-depth")) {
-            st.floor_depth = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.floor_depth) != 0) {
+                return 2;
+            }
             st.floor_set = 1;
         } else if (!strcmp(a, "--e-blur")) {
-            st.base.e_blur_sd = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.base.e_blur_sd) != 0) {
+                return 2;
+            }
         } else if (!strcmp(a, "--edge-soft")) {
-            st.edge_soft = atof(v);
+            if (num_arg(a, v, -1e300, 1e300, &st.edge_soft) != 0) {
+                return 2;
+            }
             st.soft_set = 1;
         } else {
             return bad("unknown option '%s'", a);
@@ -1630,8 +1744,22 @@ int main(int argc, char **argv)
         return bad("no scenario '%s'%s", scen,
                    strstr(scen, "-particle") ? " (a scenario on the particle engine: --engine particle)" : "");
     }
-    if (seeds < 1 || w.first_seed < 1 || threads < 1 || threads > 16) {
-        return bad("--seeds and --first-seed must be at least 1, --threads 1 to 16");
+    if (seeds > INT_MAX - w.first_seed + 1) {
+        return bad("--first-seed %d with --seeds %d runs past seed %d", w.first_seed, seeds, INT_MAX);
+    }
+    if (w.trace_path != NULL) { /* said now, not after the study */
+        FILE *t = fopen(w.trace_path, "w");
+        if (t == NULL) {
+            return bad("--trace %s: %s", w.trace_path, strerror(errno));
+        }
+        fclose(t);
+        if (!trace_seed_set) {
+            w.trace_seed = w.first_seed;
+        }
+        if (w.trace_seed < w.first_seed || w.trace_seed - w.first_seed >= seeds) {
+            return bad("--trace-seed %d is not among the seeds %d to %d", w.trace_seed, w.first_seed,
+                       w.first_seed + seeds - 1);
+        }
     }
     sc = scenarios[i];
     if (duration > 0.0) {
@@ -1682,6 +1810,12 @@ int main(int argc, char **argv)
     if (w.runs == NULL) {
         return 1;
     }
+    if (json && strcmp(json, "-") != 0) { /* opened before the study: a bad path loses no runs */
+        jf = fopen(json, "w");
+        if (jf == NULL) {
+            return bad("--json %s: %s", json, strerror(errno));
+        }
+    }
     pthread_mutex_init(&w.lock, NULL);
     for (i = 0; i < threads; ++i) {
         pthread_create(&th[i], NULL, worker, &w);
@@ -1699,12 +1833,6 @@ int main(int argc, char **argv)
         jf = fd >= 0 ? fdopen(fd, "w") : NULL;
         if (jf == NULL || dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
             perror("--json -");
-            return 1;
-        }
-    } else if (json) {
-        jf = fopen(json, "w");
-        if (jf == NULL) {
-            perror(json);
             return 1;
         }
     }
