@@ -277,6 +277,12 @@ static int model_pass(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, rea
         ng[2] = ng[2] - w > (real)0 ? ng[2] - w : (real)0;
         ng[3] = (hi - ng[2]) / (real)NV;
     }
+    if (!(ng[1] > (real)0 && ng[3] > (real)0 && ng[0] - ng[0] == (real)0 && ng[2] - ng[2] == (real)0)) {
+        /* cells narrower than float resolves where the box lies (a speed
+         * noise of scale 1e9 put it at 2.8e8 m/s; a fuzz finding: NaN cell
+         * indices): no mass, so the model is placed again (model_step) */
+        return 0;
+    }
     held = hstpf__grid_transport(f, m, l, dt, acc, ng, tot, rtot);
     hstpf__grid_diffuse(f, l, scale, ng);
     g[0] = ng[0];

@@ -25,6 +25,14 @@ static double fix_range(const hstpf_t *f)
     return (double)f->de.qt.tail_hi[k] - (double)f->de.qt.tail_lo[k];
 }
 
+/* The fix noise's 2^-10 quantile: a fix of a train at s lies above s plus
+ * this but in about 1 of 1000 (the noise's offset, a Gaussian's mean or a
+ * Gamma's location, included). */
+static double fix_lo(const hstpf_t *f)
+{
+    return (double)f->de.qt.tail_lo[HSTPF_DIST_TAILN - 3];
+}
+
 /* Lock from fixes: with a configured speed prior the first fix starts the
  * filter; otherwise, and whenever the lock is regained (the prior speaks of
  * the start: a train stopped at power-up may be at speed after an outage),
@@ -42,7 +50,7 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
         /* a train does not run backwards: fixes that credibly do, against
          * each other or behind the furthest the estimate has been, are a
          * reference that falls in the direction of travel (hstpf.h) */
-        const int back = f->have_pend && (y - f->pend_y < -fix_range(f) || y < f->top_m - fix_range(f));
+        const int back = f->have_pend && (y - f->pend_y < -fix_range(f) || y - fix_lo(f) < f->top_m - fix_range(f));
         f->backward += (uint32_t)back;
         if (back || !f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
@@ -77,19 +85,28 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     return 1;
 }
 
-/* After a step on a fix: the posterior position went back more than a
- * fix range behind the furthest it reached on a fix (at rest it averages
- * many fixes, and the model never moves it back), so the fixes run
- * backwards: the lock is dropped (the estimate goes invalid) until fixes
- * come forward past that point again (hstpf__acquire). s: the blended
- * position, absolute m. Returns 1 when dropped. */
-int hstpf__ran_backwards(hstpf_t *f, double s)
+/* After a step on fix y: the posterior position s went back more than two
+ * fix ranges behind the furthest point the train is known to have passed
+ * (at rest the posterior averages many fixes, and the model never moves it
+ * back), so the fixes run backwards: the lock is dropped (the estimate
+ * goes invalid) until fixes come forward past that point again
+ * (hstpf__acquire). The point is the posterior capped by what the fix
+ * allows (y less the noise's 2^-10 quantile): a filter that ran ahead of
+ * the train (braking the traction does not report) and lost it set a point
+ * the train never reached, and the lost-run re-acquisition at the stop was
+ * refused the whole stop (a review's harness: valid at 12 of 899 steps).
+ * s, y: absolute m. Returns 1 when dropped. */
+int hstpf__ran_backwards(hstpf_t *f, double s, double y)
 {
-    if (s >= f->top_m) {
-        f->top_m = s;
+    const double reach = y - fix_lo(f);
+    if (f->lost_run > 0u) {
         return 0;
     }
-    if (s >= f->top_m - fix_range(f)) {
+    if (s >= f->top_m) {
+        f->top_m = s < reach ? s : reach;
+        return 0;
+    }
+    if (s >= f->top_m - 2.0 * fix_range(f)) {
         return 0;
     }
     ++f->backward;

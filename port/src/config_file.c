@@ -92,6 +92,16 @@ int hstpfd_config_line(hstpfd_config_t *c, const char *line, char *err, size_t e
     }
 }
 
+/* One past the last non-zero byte of a zero-filled buffer: where the text
+ * fgets read ends when it did not end in a newline. */
+static size_t last_byte(const char *buf, size_t size)
+{
+    while (size > 0 && buf[size - 1] == '\0') {
+        --size;
+    }
+    return size;
+}
+
 int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t err_size)
 {
     FILE *fp = fopen(path, "r");
@@ -115,7 +125,7 @@ int hstpfd_config_load(hstpfd_config_t *c, const char *path, char *err, size_t e
             (void)fclose(fp);
             return -1;
         }
-        if (nl != NULL && strlen(line) < (size_t)(nl - line)) {
+        if (strlen(line) < (nl != NULL ? (size_t)(nl - line) : last_byte(line, sizeof line))) {
             hstpfd__fail(err, err_size, "%s:%u: a NUL byte in the line", path, lineno);
             (void)fclose(fp);
             return -1;

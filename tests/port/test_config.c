@@ -253,6 +253,14 @@ static void test_file_and_write(void **state)
     fclose(fp);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
     assert_non_null(strstr(err, ":2: a NUL byte"));
+    fp = fopen(path, "wb"); /* the same in a last line without its newline */
+    assert_non_null(fp);
+    fputs("particles = 13\ngate_m = 50", fp);
+    fputc('\0', fp);
+    fputs("junk", fp);
+    fclose(fp);
+    assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
+    assert_non_null(strstr(err, ":2: a NUL byte"));
     remove(path);
     assert_int_equal(hstpfd_config_load(&cfg, "/nonexistent/x.ini", err, sizeof err), -1);
     assert_non_null(strstr(err, "/nonexistent/x.ini"));

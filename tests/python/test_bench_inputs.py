@@ -238,3 +238,17 @@ def test_a_spreadsheet_csv_with_a_bom(tmp_path):
     p.write_bytes(b"\xef\xbb\xbftime_s,position_m,force_kn\r\n0,0,10\r\n0.1,0.5,10\r\n")
     assert encode.main([str(p), "-o", str(tmp_path / "x.log"), "--json", str(tmp_path / "r.json")]) == 0
     assert len(read_log(str(tmp_path / "x.log"))) == 4
+
+
+def test_inserted_frames_keep_time_order():
+    """Two IDs share each timestamp (as hstpf-simulate writes them): a
+    duplicate 1 ms later and an unknown frame 0.5 ms later go after the
+    frames of their own frame's time, not before them (times went back, and
+    hstpfd counted time_backwards)."""
+    msgs = [message(0.1 * (k // 2), 0x100 + k % 2, bytes(8)) for k in range(200)]
+    for kind in ("duplicate", "unknown"):
+        out, rep = inject(msgs, {}, {kind: [(1.0, 1.15)]}, ids={0x100})
+        assert rep["totals"] == {kind: 2}
+        t = [m.timestamp for m in out]
+        assert all(b >= a for a, b in zip(t, t[1:])), kind
+        assert len(out) == len(msgs) + 2

@@ -72,11 +72,10 @@ def inject(
     unknown_id: int = 0x7F0,
 ):
     """Returns (faulted messages, report dict). The log's order is kept (a
-    clock step in it stays one); a delayed frame goes after the frames
-    that follow it within the delay, a duplicate or an unknown frame right
-    after its frame. Window times are seconds from the first frame of the log."""
+    clock step in it stays one); a delayed, duplicated or unknown frame
+    goes after the frames that follow its own up to its time. Window times are seconds from the first frame of the log."""
     rng = np.random.default_rng(seed)
-    out: List[Tuple[float, can.Message]] = []  # (place: the log index, fractions after it; msg)
+    out: List[Tuple[float, float, can.Message]] = []  # (place: the log index, or between two; time; msg)
     if not msgs:
         return [], {"frames_in": 0, "frames_out": 0, "injected": {}, "seed": seed}
     t_start = msgs[0].timestamp
@@ -98,13 +97,13 @@ def inject(
         u = rng.random()  # drawn for every frame: faults do not shift later draws
         bit = int(rng.integers(0, 64))
         if not eligible:
-            out.append((i, m))
+            out.append((float(i), m.timestamp, m))
             continue
         if any(a <= r < b for a, b in sil):
             counts["silence"][key] += 1
             continue
         if i in skip:
-            out.append((i, m))
+            out.append((float(i), m.timestamp, m))
             continue
         kind = next((k for k in KINDS if any(a <= r < b for a, b in windows.get(k, ()))), None)
         if kind is None:
@@ -133,21 +132,28 @@ def inject(
             m = _copy(m, data=bytes(d))
         elif kind == "truncate":
             m = _copy(m, data=bytes(m.data[:-1]))
+        def after(t: float) -> float:
+            """The place of a frame of frame i's time or later, t: after the
+            frames that follow frame i up to t (not past a step back of the
+            clock), so that the times never go back."""
+            j = i + 1
+            while j < len(msgs) and msgs[i].timestamp <= msgs[j].timestamp <= t:
+                j += 1
+            return j - 0.5
+
         place = float(i)
         if kind == "delay":
             m = _copy(m, t=m.timestamp + delay_s)
-            j = i + 1  # after the frames sent before it is now due (up to a step back of the clock)
-            while j < len(msgs) and msgs[i].timestamp <= msgs[j].timestamp <= m.timestamp:
-                j += 1
-            place = j - 0.5
-        out.append((place, m))
+            place = after(m.timestamp)
+        out.append((place, m.timestamp, m))
         if kind == "duplicate":
-            out.append((i + 0.25, _copy(m, t=m.timestamp + 0.001)))
+            out.append((after(m.timestamp + 0.001), m.timestamp + 0.001, _copy(m, t=m.timestamp + 0.001)))
         elif kind == "unknown":
             x = can.Message(timestamp=m.timestamp + 0.0005, arbitration_id=unknown_id, data=bytes(8),
                             is_extended_id=False, is_rx=False, channel=m.channel)
-            out.append((i + 0.5, x))
-    out.sort(key=lambda e: e[0])  # stable: frames at one place keep their order
+            out.append((after(x.timestamp), x.timestamp, x))
+    # by place; frames put at one place by their times; stable otherwise
+    out.sort(key=lambda e: (e[0], e[1] if e[0] != int(e[0]) else 0.0))
     report = {
         "frames_in": len(msgs),
         "frames_out": len(out),
@@ -156,7 +162,7 @@ def inject(
         "totals": {k: sum(v.values()) for k, v in counts.items()},
         "silence_windows": [[round(a, 6), round(b, 6)] for a, b in sorted(sil)],
     }
-    return [e[1] for e in out], report
+    return [e[2] for e in out], report
 
 
 class SendError(Exception):

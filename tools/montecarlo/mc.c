@@ -1748,11 +1748,7 @@ int main(int argc, char **argv)
         return bad("--first-seed %d with --seeds %d runs past seed %d", w.first_seed, seeds, INT_MAX);
     }
     if (w.trace_path != NULL) { /* said now, not after the study */
-        FILE *t = fopen(w.trace_path, "w");
-        if (t == NULL) {
-            return bad("--trace %s: %s", w.trace_path, strerror(errno));
-        }
-        fclose(t);
+        FILE *t;
         if (!trace_seed_set) {
             w.trace_seed = w.first_seed;
         }
@@ -1760,6 +1756,11 @@ int main(int argc, char **argv)
             return bad("--trace-seed %d is not among the seeds %d to %d", w.trace_seed, w.first_seed,
                        w.first_seed + seeds - 1);
         }
+        t = fopen(w.trace_path, "w");
+        if (t == NULL) {
+            return bad("--trace %s: %s", w.trace_path, strerror(errno));
+        }
+        fclose(t);
     }
     sc = scenarios[i];
     if (duration > 0.0) {

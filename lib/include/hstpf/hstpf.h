@@ -242,8 +242,9 @@ typedef struct {
     /** After this many consecutive gated measurements, or measurements
      *  beyond the likelihood floor of every weighted hypothesis, the next
      *  one is taken as a new first fix (particles redrawn there, model
-     *  weights kept): a real jump of the position reference is
-     *  re-acquired. The first measurement of such a run moves no model
+     *  weights kept): a real jump forward of the position reference is
+     *  re-acquired (one back only once the fixes pass the old point, or
+     *  after hstpf_reacquire(); position_m). The first measurement of such a run moves no model
      *  weight (an outlier of a heavy-tailed noise; docs/model.md). 0 =
      *  never (5). */
     uint16_t reacquire_after;
