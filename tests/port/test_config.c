@@ -189,6 +189,15 @@ static void test_lines(void **state)
     assert_int_equal(hstpfd_config_line(&cfg, " = 50", err, sizeof err), -1);
 }
 
+/* n bytes (NULs included) into the file at path. */
+static void write_bytes(const char *path, const char *bytes, size_t n)
+{
+    FILE *fp = fopen(path, "wb");
+    assert_non_null(fp);
+    assert_int_equal(fwrite(bytes, 1, n, fp), n);
+    fclose(fp);
+}
+
 static void test_file_and_write(void **state)
 {
     const char *path = HSTPFD_TEST_DIR "/test_config.ini";
@@ -237,28 +246,15 @@ static void test_file_and_write(void **state)
     fclose(fp);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
     assert_non_null(strstr(err, ":3: particles"));
-    /* a byte-order mark before the first key is skipped; a NUL is named */
-    fp = fopen(path, "wb");
-    assert_non_null(fp);
-    fputs("\xEF\xBB\xBFparticles = 12\n", fp);
-    fclose(fp);
+    /* a byte-order mark before the first key is skipped; a NUL is named,
+     * also in a last line without its newline */
+    write_bytes(path, "\xEF\xBB\xBFparticles = 12\n", sizeof "\xEF\xBB\xBFparticles = 12\n" - 1);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), 0);
     assert_int_equal(cfg.particles, 12);
-    fp = fopen(path, "wb");
-    assert_non_null(fp);
-    fputs("particles = 13\n", fp);
-    fputs("seed = 5", fp);
-    fputc('\0', fp);
-    fputs("7\n", fp);
-    fclose(fp);
+    write_bytes(path, "particles = 13\nseed = 5\0" "7\n", sizeof "particles = 13\nseed = 5\0" "7\n" - 1);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
     assert_non_null(strstr(err, ":2: a NUL byte"));
-    fp = fopen(path, "wb"); /* the same in a last line without its newline */
-    assert_non_null(fp);
-    fputs("particles = 13\ngate_m = 50", fp);
-    fputc('\0', fp);
-    fputs("junk", fp);
-    fclose(fp);
+    write_bytes(path, "particles = 13\ngate_m = 50\0junk", sizeof "particles = 13\ngate_m = 50\0junk" - 1);
     assert_int_equal(hstpfd_config_load(&cfg, path, err, sizeof err), -1);
     assert_non_null(strstr(err, ":2: a NUL byte"));
     remove(path);
