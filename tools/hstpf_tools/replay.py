@@ -59,6 +59,16 @@ def _copy(m: can.Message, t: Optional[float] = None, data: Optional[bytes] = Non
     return n
 
 
+def _after(msgs: Sequence[can.Message], i: int, t: float) -> float:
+    """Where a frame of time t, frame i's or later, goes: after the frames
+    that follow frame i up to t (not past a step back of the clock), so
+    that the times never go back."""
+    j = i + 1
+    while j < len(msgs) and msgs[i].timestamp <= msgs[j].timestamp <= t:
+        j += 1
+    return j - 0.5
+
+
 def inject(
     msgs: Sequence[can.Message],
     rates: Dict[str, float],
@@ -132,26 +142,17 @@ def inject(
             m = _copy(m, data=bytes(d))
         elif kind == "truncate":
             m = _copy(m, data=bytes(m.data[:-1]))
-        def after(t: float) -> float:
-            """The place of a frame of frame i's time or later, t: after the
-            frames that follow frame i up to t (not past a step back of the
-            clock), so that the times never go back."""
-            j = i + 1
-            while j < len(msgs) and msgs[i].timestamp <= msgs[j].timestamp <= t:
-                j += 1
-            return j - 0.5
-
         place = float(i)
         if kind == "delay":
             m = _copy(m, t=m.timestamp + delay_s)
-            place = after(m.timestamp)
+            place = _after(msgs, i, m.timestamp)
         out.append((place, m.timestamp, m))
         if kind == "duplicate":
-            out.append((after(m.timestamp + 0.001), m.timestamp + 0.001, _copy(m, t=m.timestamp + 0.001)))
+            out.append((_after(msgs, i, m.timestamp + 0.001), m.timestamp + 0.001, _copy(m, t=m.timestamp + 0.001)))
         elif kind == "unknown":
             x = can.Message(timestamp=m.timestamp + 0.0005, arbitration_id=unknown_id, data=bytes(8),
                             is_extended_id=False, is_rx=False, channel=m.channel)
-            out.append((after(x.timestamp), x.timestamp, x))
+            out.append((_after(msgs, i, x.timestamp), x.timestamp, x))
     # by place; frames put at one place by their times; stable otherwise
     out.sort(key=lambda e: (e[0], e[1] if e[0] != int(e[0]) else 0.0))
     report = {

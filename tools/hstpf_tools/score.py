@@ -46,8 +46,9 @@ def read_truth(path: str) -> Dict[str, np.ndarray]:
         raise ValueError(f"{path}: no rows")
     cols = ("time_s", "position_m", "speed_mps", "type", "c0", "c1", "c2")
     for n, r in enumerate(rows, start=2):  # line 1 is the header
-        if any(r.get(k) in (None, "") for k in cols):  # a file cut short ends in a partial row
-            raise ValueError(f"line {n} has no {next(k for k in cols if r.get(k) in (None, ''))}")
+        gone = [k for k in cols if r.get(k) in (None, "")]  # a file cut short ends in a partial row
+        if gone:
+            raise ValueError(f"line {n} has no {gone[0]}")
     out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
@@ -78,8 +79,8 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # silence) holds a prediction, not the estimate at that input's time:
     # with inputs alignment it cannot be timed, so it is not scored.
     foreign = 0  # 29-bit frames: never ours, whatever their ID (as hstpfd)
-    in_ts = [m.timestamp for m in rec_msgs if m.arbitration_id == pos_id and bytes(m.data) in input_map
-             and is_hstpf_frame(m)]
+    matched = [m for m in rec_msgs if m.arbitration_id == pos_id and is_hstpf_frame(m) and bytes(m.data) in input_map]
+    in_ts = [m.timestamp for m in matched]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
     # For dating by EstTime when nothing else does: simulation seconds per
@@ -87,8 +88,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # (stalls and their bursts do not move it). hstpfd runs its predictions
     # on the receive time less the latest fix's latency, so a prediction
     # lies near the latest input's time plus the bus time since it, at that rate.
-    in_sim = np.array([input_map[bytes(m.data)] for m in rec_msgs
-                       if m.arbitration_id == pos_id and bytes(m.data) in input_map and is_hstpf_frame(m)])
+    in_sim = np.array([input_map[bytes(m.data)] for m in matched])
     rate = speed if speed is not None else 1.0
     if speed is None and len(in_ts) > 10:
         d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
@@ -113,7 +113,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
         if not is_hstpf_frame(m):  # a remote or CAN FD frame with one of our IDs: hstpfd's format error
             foreign += int(m.is_extended_id and not m.is_error_frame)
             name = None if m.is_extended_id or m.is_error_frame else codec.message_name(m.arbitration_id)
-            if name is not None and name != POSITION and OUTPUT_SENDER in (codec.message(name).senders or ()):
+            if name is not None and OUTPUT_SENDER in (codec.message(name).senders or ()):
                 e2e_results.setdefault(name, {}).setdefault("format", 0)
                 e2e_results[name]["format"] += 1
             continue

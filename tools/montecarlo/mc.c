@@ -1599,6 +1599,39 @@ int main(int argc, char **argv)
             return bad("'%s': an unknown option, or one without its value", a);
         }
         ++i;
+        {
+            /* the options that take any finite number: the library's
+             * configuration check holds their ranges (flag: set when given) */
+            const struct {
+                const char *name;
+                double *x;
+                int *flag;
+            } reals[] = {{"--refine-prior", &st.base.refine_prior_q, NULL},
+                         {"--refine-spread", &st.base.refine_spread, NULL},
+                         {"--ess", &st.base.ess_threshold, NULL},
+                         {"--rough", &st.base.roughening_k, NULL},
+                         {"--rough-min-s", &st.base.rough_min_s, NULL},
+                         {"--rough-min-v", &st.base.rough_min_v, NULL},
+                         {"--q-floor", &st.base.q_floor, NULL},
+                         {"--hold", &st.base.declare_hold_s, NULL},
+                         {"--threshold", &st.base.declare_threshold, NULL},
+                         {"--e-blur", &st.base.e_blur_sd, NULL},
+                         {"--floor-depth", &st.floor_depth, &st.floor_set},
+                         {"--edge-soft", &st.edge_soft, &st.soft_set}};
+            size_t r = 0;
+            while (r < sizeof reals / sizeof reals[0] && strcmp(a, reals[r].name) != 0) {
+                ++r;
+            }
+            if (r < sizeof reals / sizeof reals[0]) {
+                if (num_arg(a, v, -1e300, 1e300, reals[r].x) != 0) {
+                    return 2;
+                }
+                if (reals[r].flag != NULL) {
+                    *reals[r].flag = 1;
+                }
+                continue;
+            }
+        }
         if (!strcmp(a, "--scenario")) {
             scen = v;
         } else if (!strcmp(a, "--models")) {
@@ -1608,19 +1641,11 @@ int main(int argc, char **argv)
                 return 2;
             }
             seeds = (int)lv;
-        } else if (!strcmp(a, "--refine-prior")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.refine_prior_q) != 0) {
-                return 2;
-            }
         } else if (!strcmp(a, "--grid-rows")) {
             if (int_arg(a, v, 0, HSTPF_MAX_MODELS, &lv) != 0) {
                 return 2;
             }
             st.base.grid_rows = (uint16_t)lv;
-        } else if (!strcmp(a, "--refine-spread")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.refine_spread) != 0) {
-                return 2;
-            }
         } else if (!strcmp(a, "--threads")) {
             if (int_arg(a, v, 1, 16, &lv) != 0) {
                 return 2;
@@ -1672,10 +1697,6 @@ int main(int argc, char **argv)
                 return 2;
             }
             st.base.resample = k == 0 ? HSTPF_RESAMPLE_ALWAYS : HSTPF_RESAMPLE_ESS;
-        } else if (!strcmp(a, "--ess")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.ess_threshold) != 0) {
-                return 2;
-            }
         } else if (!strcmp(a, "--bank")) {
             static const char *const names[2] = {"paired", "independent"};
             const int k = choice_arg(a, v, names, 2);
@@ -1683,18 +1704,6 @@ int main(int argc, char **argv)
                 return 2;
             }
             st.base.bank = k == 1 ? HSTPF_BANK_INDEPENDENT : HSTPF_BANK_PAIRED;
-        } else if (!strcmp(a, "--rough")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.roughening_k) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--rough-min-s")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.rough_min_s) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--rough-min-v")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.rough_min_v) != 0) {
-                return 2;
-            }
         } else if (!strcmp(a, "--weights")) {
             static const char *const names[2] = {"marginal", "paper"};
             const int k = choice_arg(a, v, names, 2);
@@ -1702,32 +1711,6 @@ int main(int argc, char **argv)
                 return 2;
             }
             st.base.weight_method = k == 1 ? HSTPF_WEIGHT_PAPER : HSTPF_WEIGHT_MARGINAL;
-        } else if (!strcmp(a, "--q-floor")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.q_floor) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--hold")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.declare_hold_s) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--threshold")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.declare_threshold) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--floor-depth")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.floor_depth) != 0) {
-                return 2;
-            }
-            st.floor_set = 1;
-        } else if (!strcmp(a, "--e-blur")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.base.e_blur_sd) != 0) {
-                return 2;
-            }
-        } else if (!strcmp(a, "--edge-soft")) {
-            if (num_arg(a, v, -1e300, 1e300, &st.edge_soft) != 0) {
-                return 2;
-            }
-            st.soft_set = 1;
         } else {
             return bad("unknown option '%s'", a);
         }
