@@ -42,16 +42,20 @@ static double fix_lo(const hstpf_t *f)
 int hstpf__acquire(hstpf_t *f, double y, double xu)
 {
     hstpf__acq_t q;
+    int behind = 0;
     q.xu = xu;
     q.v0 = f->cfg.init_speed_mps;
     q.t12 = 0.0;
     if (f->cfg.init_speed_sd <= 0.0 || f->ever_locked) {
         const double t = f->pend_age_s; /* >= this step's dt > 0: time advanced first */
-        /* a train does not run backwards: fixes that credibly do, against
-         * each other or behind the furthest the estimate has been, are a
-         * reference that falls in the direction of travel (hstpf.h) */
-        const int back = f->have_pend && (y - f->pend_y < -fix_range(f) || y - fix_lo(f) < f->top_m - fix_range(f));
-        f->backward += (uint32_t)back;
+        /* a train does not run backwards: a pair of fixes that credibly
+         * does is a reference that falls in the direction of travel
+         * (hstpf.h); a pair behind the furthest the estimate has been may
+         * be a reference that restarted, or fixes that fall slowly: the
+         * lock is taken on probation (hstpf__probation) */
+        const int back = f->have_pend && y - f->pend_y < -fix_range(f);
+        behind = f->have_pend && y - fix_lo(f) < f->top_m - fix_range(f);
+        f->backward += (uint32_t)(back || behind);
         if (back || !f->have_pend || !(t <= f->cfg.max_gap_s) || !(t >= ACQ_T12_MIN) ||
             fabs(y - f->pend_y) > HSTPF_SPEED_MAX * t) {
             f->have_pend = 1;
@@ -82,7 +86,41 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     f->ever_locked = 1;
     f->outlier_run = 0;
     ++f->acquisitions;
+    f->probation = (uint8_t)behind;
+    if (behind) { /* the furthest point is this lock's own from here */
+        f->top_m = -HUGE_VAL;
+        f->prob_y = y;
+        f->prob_top = -HUGE_VAL;
+        f->prob_s = 0.0;
+    }
     return 1;
+}
+
+/* After a locked step on a lock taken behind the furthest point (s: the
+ * posterior, absolute m). The lock is a new reference once the train has
+ * come forward two fix ranges W from the fix it was taken on (fixes that
+ * fall, however slowly, cannot take the posterior there: the model has no
+ * reversal), or once the posterior has not fallen W / 2 behind its
+ * furthest for HSTPF_REF_PROBATION_S (a posterior that averages the fixes
+ * of a train at rest moves far less; one that follows fixes falling at
+ * more than W / 2 / 30 s, 0.23 m/s for Case 1's noise, starts the count
+ * again, and hstpf__ran_backwards drops it 2 W behind). Until then the
+ * estimate is not valid and the model weights wait. */
+void hstpf__probation(hstpf_t *f, double s, double dt)
+{
+    const double w = fix_range(f);
+    if (s > f->prob_top) {
+        f->prob_top = s;
+    }
+    if (s < f->prob_top - 0.5 * w) {
+        f->prob_top = s;
+        f->prob_s = 0.0;
+    } else {
+        f->prob_s += dt;
+    }
+    if (s - f->prob_y > 2.0 * w || f->prob_s >= HSTPF_REF_PROBATION_S) {
+        f->probation = 0;
+    }
 }
 
 /* After a step on fix y: the posterior position s went back more than two
@@ -126,6 +164,7 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->weights_wait = 0;
     f->arrival_s = 0.0;
     f->lost_run = 0;
+    f->probation = 0;
 }
 
 /* Keep float positions small: shift the origin by whole metres (rel: the

@@ -734,7 +734,10 @@ static void test_backward_fixes_not_valid(void **state)
             /* at 3 m/s the posterior needs about 10 s to fall 27.6 m behind */
             assert_true(n_valid <= (speeds[j] < -10.0 ? 0 : 16));
             assert_int_equal(n_valid_late, 0);
-            assert_true(e.backward >= 100u && !e.valid);
+            /* at 60 m/s every pair is refused; at 3 m/s each pair locks on
+             * probation (behind the furthest point) and falls 2 W behind
+             * within about 10 s: a lock and a drop per cycle, never valid */
+            assert_true(e.backward >= (speeds[j] < -10.0 ? 100u : 5u) && !e.valid);
             /* the caller's word that the reference turned: the next pair locks, once */
             assert_int_equal(hstpf_reacquire(&f), HSTPF_OK);
             for (k = 300; k < 303; ++k) {
@@ -799,6 +802,58 @@ static void test_fix_offset_not_backward(void **state)
         }
         assert_true(n_valid >= 185); /* of 189 */
         assert_int_equal(est().backward, 0u);
+    }
+}
+
+/* A reference that restarts behind where the train has been (the
+ * positioning unit starts a new run at a terminus, or a line's kilometrage
+ * changes) is a new reference, not a train running backwards: once the
+ * fixes show it (they come forward two fix ranges, 27.7 m here, or stand
+ * for HSTPF_REF_PROBATION_S without falling back) the estimate is valid
+ * again at the new reference. Before, it stayed invalid until the fixes
+ * passed the old furthest point: for the rest of the day. */
+static void test_reference_restart_tracked(void **state)
+{
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        int first_valid = -1, n_late = 0;
+        base_config(&c, engines[i], 2);
+        start(&c);
+        /* at 50 m/s: 200 s from Y0, then the reference restarts at 1 km */
+        for (k = 0; k < 400; ++k) {
+            const double y = k < 200 ? fix_at(k) : 1000.0 + V_TRUE * (k - 200) + 2.0 * sin(1.7 * k);
+            assert_true(step(1.0, u_hold(), y, 1) <= HSTPF_OK);
+            e = est();
+            if (k >= 200 && e.valid && first_valid < 0) {
+                first_valid = k;
+            }
+            if (k >= 220) { /* every step valid, at the new reference */
+                n_late += e.valid && fabs(e.position_m - (1000.0 + V_TRUE * (k - 200))) < 10.0;
+            }
+        }
+        /* 5 gated fixes, a pair to lock, then 27.7 m of progress: 1 s */
+        assert_true(first_valid >= 205 && first_valid <= 212);
+        assert_int_equal(n_late, 180);
+        assert_true(e.backward >= 1u);
+        /* standing: 100 s at the last point, then the run restarts at 0 */
+        first_valid = -1;
+        n_late = 0;
+        for (k = 0; k < 400; ++k) {
+            const double y0 = k < 100 ? 1000.0 + V_TRUE * 199.0 : 0.0;
+            assert_true(step(1.0, 0.0, y0 + 2.0 * sin(1.7 * k), 1) <= HSTPF_OK);
+            e = est();
+            if (k >= 100 && e.valid && first_valid < 0) {
+                first_valid = k;
+            }
+            n_late += k >= 300 && e.valid && fabs(e.position_m) < 3.0 && e.speed_mps < 0.5f;
+        }
+        /* invalid through the probation, valid after it */
+        assert_true(first_valid >= 100 + (int)HSTPF_REF_PROBATION_S);
+        assert_true(first_valid <= 120 + (int)HSTPF_REF_PROBATION_S);
+        assert_int_equal(n_late, 100);
     }
 }
 
@@ -1152,6 +1207,7 @@ int main(void)
         cmocka_unit_test(test_backward_fixes_not_valid),
         cmocka_unit_test(test_unreported_braking_recovers),
         cmocka_unit_test(test_fix_offset_not_backward),
+        cmocka_unit_test(test_reference_restart_tracked),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),

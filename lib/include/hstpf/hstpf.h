@@ -53,6 +53,14 @@ extern "C" {
 #define HSTPF_POS_MAX_M 1.0e8
 /** Largest |speed| accepted in a prior, m/s. */
 #define HSTPF_SPEED_MAX 200.0
+/** A lock taken on fixes behind the furthest point the train has passed
+ *  (a reference that restarted: a new run, another line's kilometrage) is
+ *  on probation, not valid, until the train has come forward two fix
+ *  ranges from where it was taken, or for this long, s, has not fallen
+ *  back half a fix range: fixes that run backwards slowly (a creep the
+ *  model, which has no reversal, cannot follow) do not publish a valid
+ *  estimate (docs/model.md, "The fixes must run forwards"). */
+#define HSTPF_REF_PROBATION_S 30.0
 
 /** Largest Davis coefficients a train type may have (and an estimate
  *  published as valid): c0 N/kN, c1 N/kN per km/h, c2 N/kN per (km/h)^2. */
@@ -341,9 +349,11 @@ typedef struct {
                               direction of travel (the model has no reversal): a unit on a line
                               whose kilometrage falls that way feeds its negative, and calls
                               hstpf_reacquire() when the train reverses. Fixes that run
-                              backwards are not tracked: they hold the estimate invalid until
-                              they come forward again past where they turned, or until
-                              hstpf_reacquire() (the estimate's backward counts them). Each
+                              backwards are not tracked: they hold the estimate invalid (the
+                              estimate's backward counts them). A reference that restarts
+                              behind (a new run from 0) is valid again once its fixes come
+                              forward, or do not fall back for HSTPF_REF_PROBATION_S;
+                              hstpf_reacquire() skips the wait. Each
                               fix once: one fed twice counts as two independent ones. */
     uint8_t has_position; /**< 0: no measurement this step, predict only */
 } hstpf_input_t;
@@ -426,8 +436,10 @@ typedef struct {
     uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
     uint32_t acquisitions;  /**< lock (re)acquired from fixes: start, outage, gated run, time step */
     uint32_t nonfinite_resets; /**< times the filter went non-finite and was re-initialised */
-    uint32_t backward;      /**< fix pairs refused, and locks dropped, because the fixes ran
-                                 backwards (position_m must grow in the direction of travel) */
+    uint32_t backward;      /**< fix pairs refused, locks dropped, and locks taken on
+                                 probation, because the fixes ran backwards or restarted behind
+                                 the furthest point (position_m must grow in the direction of
+                                 travel; HSTPF_REF_PROBATION_S) */
     uint16_t n_models;
     hstpf_model_out_t model[HSTPF_MAX_MODELS];
 } hstpf_estimate_t;
@@ -591,6 +603,10 @@ typedef struct {
     uint32_t acquisitions, nonfinite_resets;
     uint32_t backward;               /* fix pairs refused and locks dropped: the fixes ran backwards */
     double top_m;                    /* furthest posterior position on a fix, absolute m (-inf: none) */
+    double prob_y;                   /* a lock on probation: the fix it was taken on, absolute m */
+    double prob_top;                 /* its furthest posterior position, absolute m */
+    double prob_s;                   /* time since the posterior last fell back from there */
+    uint8_t probation;               /* the lock was taken behind top_m (HSTPF_REF_PROBATION_S) */
     hstpf_refine_t rf;
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
     uint8_t fit;
