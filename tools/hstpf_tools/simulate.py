@@ -36,6 +36,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, default=1800.0, help="run length, s (1800)")
     p.add_argument("--dt", type=float, default=1.0, help="model step T, s (1)")
     p.add_argument("--frame-period", type=float, default=0.1, help="position/traction frame period, s (0.1, the DBC cycle)")
+    p.add_argument("--restart-at", type=float, metavar="T",
+                   help="from simulation time T on, positions (frames and truth) count from where the train "
+                   "is at T: the positioning unit starts a new run from 0, as at a terminus (a time in a dwell) "
+                   "or where a line's kilometrage changes")
     p.add_argument("--seed", type=int, default=1, help="seed of the simulation's own numpy Generator (1)")
     p.add_argument("--mass-t", type=float, default=500.0, help="train mass for the total force in the traction frame, t (500)")
     p.add_argument("--gamma", type=float, default=0.06, help="rotating-mass factor (0.06)")
@@ -86,6 +90,8 @@ def _main(argv) -> int:
         ws, wv, e = noise_from_args(a)
         if a.frame_period <= 0 or a.mass_t <= 0 or a.dt <= 0 or a.duration <= 0:
             raise ValueError("--frame-period, --mass-t, --dt and --duration must be > 0")
+        if a.restart_at is not None and not 0 < a.restart_at <= a.duration:
+            raise ValueError("--restart-at must lie in (0, --duration]")
     except (KeyError, ValueError) as exc:
         raise cli.CliError(cli.EXIT_USAGE, str(exc).strip("'\"")) from exc
     if a.out == "-" and not a.truth:
@@ -106,6 +112,10 @@ def _main(argv) -> int:
     rng_proc, rng_meas = (np.random.default_rng(s) for s in ss.spawn(2))
     run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma)
     tf, y, u = model.sample_frames(run, a.frame_period, e, rng_meas, a.traction_noise_sd)
+    if a.restart_at is not None:  # a new run from 0 where the train is at T: the reference moves, not the train
+        s_at = float(np.interp(a.restart_at, run.t, run.s))
+        y = np.where(tf >= a.restart_at, y - s_at, y)
+        run.s = np.where(run.t >= a.restart_at, run.s - s_at, run.s)
     msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel, fix_time=not a.no_fix_time)
     n = cli.save_log(a.out, msgs, a.channel)
     truth = a.truth or str(Path(a.out).with_name(Path(a.out).stem + "_truth.csv"))
