@@ -1,10 +1,33 @@
 #!/usr/bin/env bash
 # Regenerates docs/results: every Monte Carlo scenario (100 seeds each), the
 # journeys, the Case 2 ablation, and the figures (docs/results.md gives the
-# time it took when last run whole). HSTPF_SEEDS sets most scenarios' seeds (100);
+# time it took when last run whole; hours of CPU). Name sections to run only
+# those: tools/results.sh journeys offtable (--list names them; a section
+# reads only its own outputs, but oracle those of cases and journeys, and
+# figures those of cases). HSTPF_SEEDS sets most scenarios' seeds (100);
 # HSTPF_GRID17_SEEDS only those of issue 13's 17-model grid scenarios, the
 # slowest (default HSTPF_SEEDS).
 set -euo pipefail
+sections=(cases journeys offtable prior spread norefine particle issue13 cells offtable-t offtable-case2 oracle
+          journeys-case2 lattice declaration ablation figures)
+usage() {
+  echo "usage: $0 [--list] [SECTION ...]   (no SECTION: all of them, in order)" >&2
+  exit 2
+}
+only=()
+for a in "$@"; do
+  case $a in
+  --list) printf '%s\n' "${sections[@]}"; exit 0 ;;
+  -h|--help) usage ;;
+  *) [[ " ${sections[*]} " == *" $a "* ]] || { echo "$0: no section '$a' (--list names them)" >&2; usage; }
+     only+=("$a") ;;
+  esac
+done
+# section NAME: run it? (every section when none is named)
+section() {
+  [ ${#only[@]} -eq 0 ] && return 0
+  [[ " ${only[*]} " == *" $1 "* ]]
+}
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 source tools/setup.sh
@@ -19,6 +42,8 @@ mkdir -p "$out" docs/img
 # below act on the particle engine only.
 settings=(--e-blur 0.2 --rough 0.7)
 seeds=${HSTPF_SEEDS:-100}
+gseeds=${HSTPF_GRID17_SEEDS:-$seeds}
+if section cases; then
 for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-known; do
   echo "== $s"
   trace=()
@@ -27,13 +52,17 @@ for s in paper1 paper2 all17 all17-coast all17-coast-loss hilly-ignored hilly-kn
   case $s in paper1|paper2|all17) oracle=(--oracle) ;; esac # the on-table oracle (below) rides along
   "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" "${oracle[@]}" --json "$out/$s.json" "${trace[@]}" | tee "$out/$s.txt"
 done
+fi
+if section journeys; then
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
-for s in stops day start300 clock+30 clock-30 outage gain5; do
+for s in stops day start300 clock+30 clock-30 outage gain5 restart; do
   echo "== $s"
   oracle=()
   case $s in stops) oracle=(--oracle) ;; esac
   "$mc" --scenario "$s" --seeds "$seeds" "${oracle[@]}" --json "$out/$s.json" | tee "$out/$s.txt"
 done
+fi
+if section offtable; then
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"
 for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
   echo "== $s"
@@ -41,18 +70,24 @@ for s in off10 off15 off20 grade8 mass10 mass20 absent gain-5; do
   "$mc" --scenario "$s" --seeds "$seeds" --oracle --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tee "$out/$s-norefine.txt"
 done
+fi
+if section prior; then
 echo "== the continuous hypothesis's prior weight: on-table speed against off-table safety"
 for q in 0.03 0.02 0.003 0.001; do
   for s in paper1 all17 off15 mass20 absent grade8; do
     "$mc" --scenario "$s" --seeds "$seeds" --refine-prior "$q" | tee "$out/$s-prior$q.txt"
   done
 done
+fi
+if section spread; then
 echo "== the rows' spread (refine_spread, default 0.3): the band against the decisions"
 for sp in 0.2 0.4; do
   for s in paper1 all17 stops off10 off15 off20 mass10 mass20 absent; do
     "$mc" --scenario "$s" --seeds "$seeds" --refine-spread "$sp" | tee "$out/$s-spread$sp.txt"
   done
 done
+fi
+if section norefine; then
 echo "== on-table figures without the continuous hypothesis"
 for s in paper1 all17 stops; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-refine | tee "$out/$s-norefine.txt"
@@ -60,10 +95,14 @@ done
 .venv/bin/python tools/figures/theta_limit.py --json "$out/theta_limit.json" | tee "$out/theta_limit.txt"
 .venv/bin/python tools/figures/theta_limit.py --scale 1.1 1.1 1.1 | tee "$out/theta_limit_mass10.txt"
 .venv/bin/python tools/figures/theta_limit.py --scale 1.2 0.8 1.2 | tee "$out/theta_limit_off20.txt"
+fi
+if section particle; then
 echo "== particle engine on the Gaussian cases (the paper's method) and on Case 2"
 for s in paper1 all17 paper2; do
   "$mc" --scenario "$s" --seeds "$seeds" "${settings[@]}" --engine particle | tee "$out/$s-particle.txt"
 done
+fi
+if section issue13; then
 echo "== issue 13: all 17 types with Case 2 noise, and heavy-tailed position noise; grid and particle engines"
 # 17 models on the grid engine cost about 2 s of CPU per 1800-s run, so a
 # scenario of 1700 runs is about an hour of CPU (docs/results.md gives the
@@ -72,7 +111,6 @@ echo "== issue 13: all 17 types with Case 2 noise, and heavy-tailed position noi
 # particle engine keeps the study's settings, at the library's M and at 256;
 # a table density takes no blur, so the heavy scenarios' particles have only
 # the roughening.
-gseeds=${HSTPF_GRID17_SEEDS:-$seeds}
 for s in all17-case2 all17-coast-case2; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$gseeds" --engine grid --json "$out/$s-grid.json" | tee "$out/$s-grid.txt"
@@ -92,6 +130,8 @@ for s in heavy-t heavy-mix; do
   # reference: the filter told only a Gaussian of the noise's sd (the Kalman engine)
   "$mc" --scenario "$s" --seeds "$gseeds" --gauss-e --json "$out/$s-gauss.json" | tee "$out/$s-gauss.txt"
 done
+fi
+if section cells; then
 echo "== the grid's cells (position x speed): paper Case 2 on seeds 1-100 and 1001-1100"
 # Each shape is a compile-time capacity: the library built again at it.
 for shape in "48 48" "24 96" "20 72"; do
@@ -105,8 +145,10 @@ for shape in "48 48" "24 96" "20 72"; do
       --first-seed "$first" | tail -1)"
   done
 done | tee "$out/grid_cells.txt"
+fi
+if section offtable-t; then
 echo "== trains not on Table 1 with Student-t fixes: the grid engine's continuous hypothesis"
-for s in stops-t off15-t grade8-t; do
+for s in stops-t off15-t grade8-t restart-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 # the line with stops with every row on the grid: the truth's declaration, paired with the defaults' 3 rows
@@ -114,6 +156,8 @@ done
 for s in off15-t grade8-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --no-refine | tee "$out/$s-norefine.txt"
 done
+fi
+if section offtable-case2; then
 echo "== trains not on Table 1 under Case 2 noise: the defaults (the hypothesis on its own grid since the"
 echo "   fifteenth session) and the rows alone (--no-refine; what the defaults did before)"
 # HSTPF_OFF_CASE2_SEEDS: seeds per truth (17 models x 1800 s: about 40 min of CPU per 100 seeds)
@@ -122,6 +166,8 @@ for s in off15-case2 grade8-case2 mass20-case2 absent-case2; do
   "$mc" --scenario "$s" --seeds "$oseeds" --oracle --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds 10 --first-seed 11 --no-refine --json "$out/$s-norefine.json" | tee "$out/$s-norefine.txt"
 done
+fi
+if section oracle; then
 echo "== what the data allow (hstpf-mc --oracle): on the table, when the row leads every train 10 % from it"
 echo "   by log 99 (the off-table runs above carry their own oracle lines); docs/results.md, Seventeenth session"
 for s in paper1 paper2 all17 stops; do # run above with --oracle: their oracle lines
@@ -129,6 +175,8 @@ for s in paper1 paper2 all17 stops; do # run above with --oracle: their oracle l
 done
 "$mc" --scenario paper2 --seeds "$seeds" --oracle-gauss | tee "$out/paper2-oracle-gauss.txt"
 "$mc" --scenario all17-case2 --seeds "${HSTPF_ORACLE17_SEEDS:-20}" --oracle | tee "$out/all17-case2-oracle.txt"
+fi
+if section journeys-case2; then
 echo "== issue 13's journey: the line with stops, Case 2 noise, 17 types (the grid engine by default)"
 "$mc" --scenario stops-case2 --seeds "$gseeds" --json "$out/stops-case2.json" | tee "$out/stops-case2.txt"
 # HSTPF_EVENTS_CASE2_SEEDS: their seeds per truth (20; docs/results.md's figures are at 100, about 20 min each)
@@ -138,12 +186,16 @@ for s in start300-case2 clock+30-case2 clock-30-case2 outage-case2; do
 done
 # the same journeys through the daemon (hstpfd --log, its defaults, models = all, noise = case2)
 tools/journeys_case2.sh --seeds 5 --out "$out/journeys-case2" | tee "$out/journeys-case2.txt"
+fi
+if section lattice; then
 echo "== the grid's speed lattice (cfg.grid_speed_lattice, the default): paper Case 2 on seeds 1-2000"
 echo "   with it and without it (the remapped box, the default until the thirteenth session; docs/grid.md)"
 "$mc" --scenario paper2 --seeds 2000 --json "$out/paper2-2000.json" | tail -1 | tee "$out/paper2-2000.txt"
 "$mc" --scenario paper2 --seeds 2000 --no-speed-lattice --json "$out/paper2-remap.json" | tee "$out/paper2-remap.txt"
 # the grid against a particle filter on the exact Case 2 densities, seed by seed
 .venv/bin/python tools/figures/oracle_case2.py --mc "$mc" --seeds 20 --particles 50000 | tee "$out/oracle_case2.txt"
+fi
+if section declaration; then
 echo "== declaration rule (17 types, both engines)"
 {
   echo "engine | threshold | hold [s] | result"
@@ -154,6 +206,8 @@ echo "== declaration rule (17 types, both engines)"
   done
   echo "particle | 0.99 | 30 | $(tail -1 "$out/all17-particle.txt")"
 } | tee "$out/declaration_rule.txt"
+fi
+if section ablation; then
 echo "== Case 2 ablation"
 {
   echo "variant | result"
@@ -173,6 +227,9 @@ echo "== Case 2 ablation"
     echo "$name | $row"
   done
 } | tee "$out/ablation_case2.txt"
+fi
+if section figures; then
 python tools/figures/make_figures.py --trace1 "$out/trace_paper1.csv" --trace2 "$out/trace_paper2.csv" \
   --json "$out"/paper1.json "$out"/paper2.json "$out"/all17.json "$out"/all17-coast.json "$out"/all17-coast-loss.json \
   --out docs/img
+fi

@@ -209,3 +209,16 @@ def test_paired_declaration(tmp_path):
     # declared in both: differences +10, 0, +300, -20: lower median 0, mean 72.5,
     # sd sqrt((62.5^2 + 72.5^2 + 227.5^2 + 92.5^2) / 3) = 152.2, se 152.2 / 2 = 76.1
     assert cells == ["6", "5 / 5", "4", "+0, +72.5 +- 76.1", "2 / 1 / 1", "1 / 0"]
+
+
+def test_restarts_row(tmp_path):
+    # hstpf-mc's own wording (the restart scenario's two lines)
+    (tmp_path / "restart.txt").write_text(
+        "total: 170 runs; false declarations 2 (1.2%), 0 from a standstill, 0 outside the pair; ...\n"
+        "reference restarted at a stop in 170 of 170 runs; valid again after a median 35 s, p90 36 s, "
+        "max 61 s (never in 0); valid at 97.7% of the steps after it; |position error| at a valid step "
+        "after it max 6.11 m\n")
+    table = rt.restarts(tmp_path).splitlines()
+    assert len(table) == 3  # header, rule, restart (restart-t absent)
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells == ["`restart`", "170 of 170", "35 / 36 / 61", "0", "97.7%", "6.11", "2 (1.2%)"]

@@ -64,6 +64,28 @@ def journeys(d: Path) -> str:
     return "\n".join(out)
 
 
+RESTARTS = ["restart", "restart-t"]
+
+
+def restarts(d: Path) -> str:
+    """The reference restarted at a stop (hstpf-mc's restart scenarios): how
+    soon the estimate is valid again, and how right it is then."""
+    out = ["| scenario | runs restarted | valid again after, median / p90 / max [s] | never | steps valid after it "
+           "| max position error at a valid step after it [m] | false declarations (runs) |",
+           "|" + "---|" * 7]
+    for s in RESTARTS:
+        if not (d / f"{s}.txt").exists():
+            continue
+        r = last(d / f"{s}.txt", "reference restarted")
+        t = last(d / f"{s}.txt", "total:")
+        out.append("| `{}` | {} | {} / {} / {} | {} | {} | {} | {} ({}) |".format(
+            s, num(r"in (\d+ of \d+) runs", r), num(r"after a median (\d+) s", r), num(r"p90 (\d+) s", r),
+            num(r"max (\d+) s", r), num(r"never in (\d+)", r), num(r"valid at ([\d.]+%)", r),
+            num(r"after it max ([\d.]+) m", r), num(r"false declarations (\d+)", t),
+            num(r"false declarations \d+ \(([\d.]+%)\)", t)))
+    return "\n".join(out)
+
+
 def far_split(path: Path) -> str:
     """The runs whose truth is >= 10 % from every row (issue 10's off-table
     runs): how many, 'no type fits' at the end, a type declared; '-' for an
@@ -330,6 +352,8 @@ def main(argv=None) -> int:
         print(studies(d))
         print("\n### Journeys, totals\n")
         print(journeys(d))
+        print("\n### The reference restarted at a stop\n")
+        print(restarts(d))
         print("\n### Trains not on Table 1\n")
         print(offtable(d))
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_T):

@@ -48,6 +48,8 @@ typedef struct {
     double grade_permille;      /* an unmodelled constant gradient */
     int common;                 /* perturb: one factor (1 +- perturb) for all three, mass-like */
     int absent;                 /* the truth's row is not in the filter's bank */
+    /* a reference that restarts (zero for the others) */
+    double restart_after_s;     /* at the first stop held after this, the fixes restart at 0 */
 } scenario_t;
 
 typedef struct timetable {
@@ -76,6 +78,10 @@ typedef struct {
     double outage_s;            /* outage length drawn for this run, s */
     long out_cover_p, out_cover_v, n_out; /* the same, outage steps only */
     double out_pe_max;          /* max |position error| during the outage */
+    double restart_t;           /* when the reference restarted (-1: it did not) */
+    double revalid_s;           /* from then to the first valid step (-1: none) */
+    long n_restart, n_restart_valid; /* steps after it, and of those valid */
+    double restart_pe_max;      /* max |position error| at a valid step after it, new reference */
 } journey_t;
 
 /* Filter settings under study: the same for every scenario and truth. */
@@ -376,6 +382,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     double q_rest[MAXM], out_start = -1.0, last_rest_t = -1e9;
     const double t_event = w->sc->clock_step_s != 0.0 ? w->sc->clock_at_s : 0.0;
     int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
+    double ref_off = 0.0;          /* the reference's restart: added to the truth and its fixes */
     hstpf_theta_t bank[MAXM];
     /* --oracle */
     hstpf_t *fo = NULL;
@@ -400,6 +407,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->false_model = -1;
     jr->v_min_rest = HUGE_VAL;
     jr->pe10 = -1.0;
+    jr->restart_t = jr->revalid_s = -1.0;
     hstpf_sim_default(&sc);
     sc.truth = w->models[truth];
     sc.profile = w->sc->profile;
@@ -536,6 +544,14 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         double qt;
         hstpf_sim_next_input(&sim, &smp, &in);
         in.traction *= 1.0 + w->sc->gain_bias;
+        if (w->sc->restart_after_s > 0.0 && jr->restart_t < 0.0 && smp.t >= w->sc->restart_after_s && smp.held) {
+            /* the positioning unit starts a new run where the train stands */
+            jr->restart_t = smp.t;
+            ref_off = -smp.s;
+        }
+        smp.s += ref_off; /* the truth and its fixes on the reference the unit sends */
+        smp.y += ref_off;
+        in.position_m += ref_off;
         if (w->sc->outage && out_start < 0.0 && sim.leg == OUTAGE_LEG &&
             sim.phase == HSTPF_SIM_RUN && smp.t - sim.phase_t0 >= OUTAGE_AFTER_S) {
             out_start = smp.t;
@@ -581,11 +597,21 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 }
             }
         }
-        if (hstpf_step(f, &in) != HSTPF_OK) {
-            ++n_err;
+        {
+            const int32_t rc = hstpf_step(f, &in);
+            n_err += rc != HSTPF_OK && rc != HSTPF_E_OUTLIER; /* a gated fix: the step was taken */
         }
         (void)hstpf_estimate(f, &est);
         have_fix |= in.has_position;
+        if (jr->restart_t >= 0.0) {
+            ++jr->n_restart;
+            if (est.valid) {
+                const double ep = fabs(est.position_m - smp.s);
+                ++jr->n_restart_valid;
+                jr->revalid_s = jr->revalid_s < 0.0 ? smp.t - jr->restart_t : jr->revalid_s;
+                jr->restart_pe_max = ep > jr->restart_pe_max ? ep : jr->restart_pe_max;
+            }
+        }
         jr->assert_fail += !decl_consistent(&est, cfg.models, cfg.n_models);
         decl = table_index(w, truth, est.declared);
         if (fo && no > 9 && decl >= 0 && decl == oi[1] && decl != truth) { /* a wrong type: not the truth's own row */
@@ -869,55 +895,58 @@ static const timetable_t start300_tt = {start300_legs, 3, -1.0, 300.0};
 #define CLOCK_AT_S 1250.0 /* on the line: leg 3 cruising at 300 km/h */
 
 static const scenario_t scenarios[] = {
-    {"paper1", 1, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"paper2", 2, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"paper1", 1, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"paper2", 2, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
     /* all 17 types with the paper's Case 2 (Gamma) noise (issue 13) */
-    {"all17-case2", 2, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"all17-coast-case2", 2, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"all17-case2", 2, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"all17-coast-case2", 2, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
     /* heavy-tailed position noise with Case 1's process noise (issue 13) */
-    {"heavy-t", 3, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"heavy-mix", 4, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
+    {"heavy-t", 3, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"heavy-mix", 4, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
     /* journeys: 17 types, Case 1 noise, the holding brake reported at rest */
-    {"stops", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"day", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 14400.0, 0, 0, &day_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"start300", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"clock+30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"clock-30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"outage", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0},
-    {"gain5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.05, 0.0, 0.0, 0, 0},
+    {"stops", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"day", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 14400.0, 0, 0, &day_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"start300", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"clock+30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"clock-30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"outage", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"gain5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.05, 0.0, 0.0, 0, 0, 0.0},
     /* trains not on Table 1: the line, each coefficient 10 / 15 / 20 % off its row; an
      * unmodelled 8 per-mille climb; all three by one mass-like factor 10 / 20 %; the
      * truth's row left out of the bank; a traction gain 5 % low */
-    {"off10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 0, 0},
-    {"off15", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
-    {"off20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 0, 0},
-    {"grade8", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
-    {"mass10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 1, 0},
-    {"mass20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0},
-    {"absent", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1},
-    {"gain-5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, -0.05, 0.0, 0.0, 0, 0},
+    {"off10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 0, 0, 0.0},
+    {"off15", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0},
+    {"off20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 0, 0, 0.0},
+    {"grade8", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0},
+    {"mass10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 1, 0, 0.0},
+    {"mass20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0, 0.0},
+    {"absent", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1, 0.0},
+    /* the positioning unit starts a new run (0 where the train stands) at a stop on the line */
+    {"restart", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 1000.0},
+    {"gain-5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, -0.05, 0.0, 0.0, 0, 0, 0.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
-    {"stops-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"off15-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
-    {"grade8-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
+    {"stops-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"restart-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 1000.0},
+    {"off15-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0},
+    {"grade8-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0},
     /* the line with Case 2's Gamma noise, 17 types: issue 13's daemon journey;
      * then the start at speed, the clock steps and the outage under it */
-    {"stops-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"start300-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"clock+30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"clock-30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0},
-    {"outage-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0},
+    {"stops-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"start300-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"clock+30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"clock-30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0},
+    {"outage-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0, 0.0},
     /* trains not on Table 1 under Case 2 noise (the hypothesis needs --refine-any-noise) */
-    {"off15-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0},
-    {"grade8-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0},
-    {"mass20-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0},
-    {"absent-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1},
+    {"off15-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0},
+    {"grade8-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0},
+    {"mass20-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0, 0.0},
+    {"absent-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1, 0.0},
 };
 
 /* Journey table: one row per truth and a total (docs/results.md). */
@@ -1054,12 +1083,19 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                 fprintf(jf,
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
-                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g}",
+                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
                         q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms);
+                if (w->sc->restart_after_s > 0.0) {
+                    fprintf(jf, ",\"restart_t\":%.0f,\"revalid_s\":%.0f,\"restart_valid\":%.4f,\"restart_pe_max\":%.4g",
+                            q->restart_t, q->revalid_s,
+                            q->n_restart ? (double)q->n_restart_valid / (double)q->n_restart : 0.0,
+                            q->restart_pe_max);
+                }
+                fputc('}', jf);
             }
             fprintf(jf, "]}");
         }
@@ -1076,6 +1112,32 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
+    if (w->sc->restart_after_s > 0.0) { /* the reference restarted at a stop: how soon valid again */
+        double *rv = malloc(sizeof(double) * (size_t)all);
+        int nrv = 0, nrs = 0;
+        long nv = 0, ns = 0;
+        double pemax = 0.0;
+        if (rv == NULL) {
+            fprintf(stderr, "out of memory\n");
+            exit(1);
+        }
+        for (j = 0; j < all; ++j) {
+            const journey_t *q = &w->runs[j].j;
+            nrs += q->restart_t >= 0.0;
+            if (q->revalid_s >= 0.0) {
+                rv[nrv++] = q->revalid_s;
+            }
+            nv += q->n_restart_valid;
+            ns += q->n_restart;
+            pemax = q->restart_pe_max > pemax ? q->restart_pe_max : pemax;
+        }
+        printf("reference restarted at a stop in %d of %d runs; valid again after a median %.0f s, p90 %.0f s, "
+               "max %.0f s (never in %d); valid at %.1f%% of the steps after it; |position error| at a valid "
+               "step after it max %.2f m\n",
+               nrs, all, pct(rv, nrv, 0.5), pct(rv, nrv, 0.9), pct(rv, nrv, 1.0), nrs - nrv,
+               ns ? 100.0 * (double)nv / (double)ns : 0.0, pemax);
+        free(rv);
+    }
     if (on_table(w->sc) && n_td_all > 0) { /* the truth's own declaration at the end (Table 2's rule): how many, since when */
         printf("the truth declared: %d of %d runs (%.1f%%), outside the pairs %d of %d (%.1f%%); since a median "
                "%.0f s, p90 %.0f s, max %.0f s\n",
