@@ -99,7 +99,7 @@ static void reset_state(hstpf_t *f)
     f->nonfinite_resets = 0;
     f->backward = 0;
     f->top_m = -HUGE_VAL;
-    f->probation = 0;
+    memset(&f->pr, 0, sizeof f->pr);
     f->standstill = 0;
     f->weights_wait = 0;
     f->arrival_s = 0.0;
@@ -423,7 +423,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at
      * the weight floor that happens to lie near it would take all the
      * weight for that step. A second one in a row moves them as usual. */
-    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->probation;
+    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active;
     if (weigh) {
         update_model_weights(f);
     }
@@ -447,8 +447,8 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         if (has_y && hstpf__ran_backwards(f, s_m, in->position_m)) {
             return gated ? HSTPF_E_OUTLIER : HSTPF_OK;
         }
-        if (has_y && f->probation) {
-            hstpf__probation(f, s_m, in->dt_s);
+        if (has_y && (f->pr.active || f->pr.timed)) {
+            hstpf__probation(f, s_m, in->position_m);
         }
     }
     if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {

@@ -30,7 +30,7 @@ static inline uint16_t hstpf__n_hyp(const hstpf_t *f)
 int hstpf__acquire(hstpf_t *f, double y, double xu);
 void hstpf__drop_lock(hstpf_t *f, int keep_pend);
 int hstpf__ran_backwards(hstpf_t *f, double s_m, double y_m);
-void hstpf__probation(hstpf_t *f, double s_m, double dt);
+void hstpf__probation(hstpf_t *f, double s_m, double y_m);
 void hstpf__rebase(hstpf_t *f, double rel);
 void hstpf__models_reacquire(hstpf_t *f, real yr);
 void hstpf__nonfinite_reset(hstpf_t *f);

@@ -86,40 +86,87 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     f->ever_locked = 1;
     f->outlier_run = 0;
     ++f->acquisitions;
-    f->probation = (uint8_t)behind;
-    if (behind) { /* the furthest point is this lock's own from here */
-        f->top_m = -HUGE_VAL;
-        f->prob_y = y;
-        f->prob_top = -HUGE_VAL;
-        f->prob_s = 0.0;
+    f->pr.active = (uint8_t)behind;
+    if (behind) {
+        /* the furthest point is this lock's own from here: what the fix
+         * allows, so that a drop before its first fitted fix keeps it */
+        f->top_m = y - fix_lo(f);
+        f->pr.based = 0;
+        f->pr.no_timer = f->pr.timed;
     }
     return 1;
 }
 
-/* After a locked step on a lock taken behind the furthest point (s: the
- * posterior, absolute m). The lock is a new reference once the train has
- * come forward two fix ranges W from the fix it was taken on (fixes that
- * fall, however slowly, cannot take the posterior there: the model has no
- * reversal), or once the posterior has not fallen W / 2 behind its
- * furthest for HSTPF_REF_PROBATION_S (a posterior that averages the fixes
- * of a train at rest moves far less; one that follows fixes falling at
- * more than W / 2 / 30 s, 0.23 m/s for Case 1's noise, starts the count
- * again, and hstpf__ran_backwards drops it 2 W behind). Until then the
- * estimate is not valid and the model weights wait. */
-void hstpf__probation(hstpf_t *f, double s, double dt)
+static void window_start(hstpf_probation_t *p, double t, double s)
 {
+    p->t0_s = t;
+    p->top_m = s;
+    p->sum[0] = p->sum[1] = p->sum[2] = p->sum[3] = p->sum[4] = 0.0;
+}
+
+/* The fall of the window's fixes over its span, from their least-squares
+ * line (the noise's offset cancels); 0 with fewer than three. */
+static double window_fall(const hstpf_probation_t *p, double span)
+{
+    const double n = p->sum[0];
+    double stt;
+    if (n < 3.0) {
+        return 0.0;
+    }
+    stt = p->sum[3] - p->sum[1] * p->sum[1] / n;
+    return stt > 0.0 ? -(p->sum[4] - p->sum[1] * p->sum[2] / n) / stt * span : 0.0;
+}
+
+/* After a locked step with a fix y (absolute m; s: the posterior), while
+ * a lock taken behind the furthest point is on probation, or the last one
+ * ended on its timer. The lock is a new reference once the train has come
+ * forward two fix ranges W from the posterior at its first fix (fixes that
+ * fall, however slowly, cannot take it there: the model has no reversal),
+ * or after HSTPF_REF_PROBATION_S of time (not of steps with fixes) in
+ * which the posterior has not fallen W / 2 behind its furthest and the
+ * fixes' least-squares line has not fallen W / 4: at rest the model holds
+ * the posterior still, so only the fixes tell a creep (0.12 m/s over 30 s
+ * for the default noise, 2.5 sd of that line's fall). A fall restarts the
+ * window. A creep slower than that ends one window; a lock taken behind
+ * again before the train has come forward 2 W then ends only by coming
+ * forward. Until it ends the estimate is not valid and the weights wait. */
+void hstpf__probation(hstpf_t *f, double s, double y)
+{
+    hstpf_probation_t *p = &f->pr;
     const double w = fix_range(f);
-    if (s > f->prob_top) {
-        f->prob_top = s;
+    if (!p->active) { /* timed: has the train come forward since? */
+        p->timed = (uint8_t)(s - p->end_m <= 2.0 * w);
+        return;
     }
-    if (s < f->prob_top - 0.5 * w) {
-        f->prob_top = s;
-        f->prob_s = 0.0;
-    } else {
-        f->prob_s += dt;
+    if (!p->based) {
+        p->based = 1;
+        p->base_m = s;
+        window_start(p, f->time_s, s);
     }
-    if (s - f->prob_y > 2.0 * w || f->prob_s >= HSTPF_REF_PROBATION_S) {
-        f->probation = 0;
+    if (s - p->base_m > 2.0 * w) {
+        p->active = 0;
+        p->timed = 0;
+        return;
+    }
+    {
+        const double t = f->time_s - p->t0_s, yr = y - p->base_m;
+        p->sum[0] += 1.0;
+        p->sum[1] += t;
+        p->sum[2] += yr;
+        p->sum[3] += t * t;
+        p->sum[4] += t * yr;
+    }
+    p->top_m = s > p->top_m ? s : p->top_m;
+    if (s < p->top_m - 0.5 * w) {
+        window_start(p, f->time_s, s);
+    } else if (!p->no_timer && f->time_s - p->t0_s >= HSTPF_REF_PROBATION_S) {
+        if (window_fall(p, f->time_s - p->t0_s) > 0.25 * w) {
+            window_start(p, f->time_s, s);
+        } else {
+            p->active = 0;
+            p->timed = 1;
+            p->end_m = s;
+        }
     }
 }
 
@@ -164,7 +211,7 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->weights_wait = 0;
     f->arrival_s = 0.0;
     f->lost_run = 0;
-    f->probation = 0;
+    f->pr.active = 0;
 }
 
 /* Keep float positions small: shift the origin by whole metres (rel: the
@@ -221,6 +268,7 @@ int32_t hstpf_reacquire(hstpf_t *f)
     }
     hstpf__drop_lock(f, 0);
     f->top_m = -HUGE_VAL; /* the caller's word: the reference may have turned round */
+    f->pr.timed = 0;
     return HSTPF_OK;
 }
 

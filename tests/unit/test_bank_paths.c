@@ -857,6 +857,63 @@ static void test_reference_restart_tracked(void **state)
     }
 }
 
+/* A lock on probation that a review's harness got past (every engine):
+ * fixes that jump back 500 m and then creep back at 0.3 m/s (the held
+ * posterior does not follow them, so only the fixes' own line tells);
+ * with a fix noise of mean -40 m and a creep of 3 m/s (the progress was
+ * measured from the raw fix, 40 m behind the posterior); fixes falling at
+ * 20 m/s whose lock was dropped before its first fitted fix (the next one
+ * skipped the probation). None may be valid after the jump (the fall's
+ * first two fixes at 20 m/s, which has none, are the first lock's). And
+ * the 30 s
+ * are time, not steps with fixes: 0.1 s steps with a fix every second,
+ * the reference restarting at rest, valid again after 36 s (was 306). */
+static void test_probation_guards(void **state)
+{
+    static const double creep[3] = {0.3, 3.0, 20.0};
+    int i, j, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) {
+            hstpf_config_t c;
+            int n_valid = 0;
+            base_config(&c, engines[i], 2);
+            c.noise_e.mean = j == 1 ? -40.0 : 0.0;
+            start(&c);
+            for (k = 0; k < 500; ++k) {
+                const double e = c.noise_e.mean + 2.0 * sin(1.7 * k);
+                const double y = k < 100 ? Y0 : (j == 2 ? Y0 : Y0 - 500.0) - creep[j] * (k - 100);
+                assert_true(step(1.0, 0.0, y + e, 1) <= HSTPF_OK);
+                n_valid += k >= 100 && est().valid;
+            }
+            /* at 20 m/s there is no jump: the lock taken at rest is valid at
+             * the fall's first fix (on the rest point) and may be at its
+             * second (20 m back, within the particles' floor) */
+            if (n_valid > (j == 2 ? 2 : 0)) {
+                fail_msg("engine %d, creep %g m/s: valid at %d steps after the jump", i, creep[j], n_valid);
+            }
+        }
+        {
+            hstpf_config_t c;
+            int first_valid = -1;
+            base_config(&c, engines[i], 2);
+            start(&c);
+            for (k = 0; k < 2000; ++k) {
+                const int has_y = k % 10 == 0;
+                const double y = (k < 1000 ? Y0 : 0.0) + 2.0 * sin(1.7 * k);
+                assert_true(step(0.1, 0.0, y, has_y) <= HSTPF_OK);
+                if (k >= 1000 && first_valid < 0 && est().valid) {
+                    first_valid = k;
+                }
+            }
+            /* 5 gated fixes, the pair, 30 s: 36 s after the restart */
+            if (!(first_valid >= 1000 + 350 && first_valid <= 1000 + 400)) {
+                fail_msg("engine %d: valid again at step %d (0.1 s steps)", i, first_valid);
+            }
+        }
+    }
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -1208,6 +1265,7 @@ int main(void)
         cmocka_unit_test(test_unreported_braking_recovers),
         cmocka_unit_test(test_fix_offset_not_backward),
         cmocka_unit_test(test_reference_restart_tracked),
+        cmocka_unit_test(test_probation_guards),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),

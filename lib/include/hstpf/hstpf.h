@@ -55,11 +55,15 @@ extern "C" {
 #define HSTPF_SPEED_MAX 200.0
 /** A lock taken on fixes behind the furthest point the train has passed
  *  (a reference that restarted: a new run, another line's kilometrage) is
- *  on probation, not valid, until the train has come forward two fix
- *  ranges from where it was taken, or for this long, s, has not fallen
- *  back half a fix range: fixes that run backwards slowly (a creep the
- *  model, which has no reversal, cannot follow) do not publish a valid
- *  estimate (docs/model.md, "The fixes must run forwards"). */
+ *  on probation, not valid and the model weights waiting, until the train
+ *  has come forward two fix ranges, or for this long, s (time, not steps
+ *  with fixes), neither the posterior has fallen half a fix range nor the
+ *  fixes' least-squares line a quarter of one. Fixes that fall slowly (a
+ *  creep the model, which has no reversal, cannot follow) restart that
+ *  count; one slower than the line can tell in 30 s (about 0.12 m/s for
+ *  the default noise) ends it once, and a lock taken behind again before
+ *  the train has come forward ends only by coming forward (docs/model.md,
+ *  "The fixes must run forwards"). */
 #define HSTPF_REF_PROBATION_S 30.0
 
 /** Largest Davis coefficients a train type may have (and an estimate
@@ -251,8 +255,8 @@ typedef struct {
      *  beyond the likelihood floor of every weighted hypothesis, the next
      *  one is taken as a new first fix (particles redrawn there, model
      *  weights kept): a real jump forward of the position reference is
-     *  re-acquired (one back only once the fixes pass the old point, or
-     *  after hstpf_reacquire(); position_m). The first measurement of such a run moves no model
+     *  re-acquired (one back on probation, HSTPF_REF_PROBATION_S, or at
+     *  once after hstpf_reacquire(); position_m). The first measurement of such a run moves no model
      *  weight (an outlier of a heavy-tailed noise; docs/model.md). 0 =
      *  never (5). */
     uint16_t reacquire_after;
@@ -565,6 +569,19 @@ typedef struct {
  * workspace pointer, not the workspace. docs/footprint.md lists measured
  * sizes.
  */
+/* A lock on probation (lib/src/lock.c, hstpf__probation): internal. */
+typedef struct {
+    double base_m;   /* posterior position at its first fix, absolute m */
+    double top_m;    /* furthest posterior position in this window, absolute m */
+    double t0_s;     /* time_s when this window began */
+    double sum[5];   /* the window's fixes: n, sum t, sum y, sum t^2, sum t y (t from t0_s, y from base_m) */
+    double end_m;    /* posterior position where the last one ended on its timer */
+    uint8_t active;  /* on probation: not valid, the weights wait */
+    uint8_t based;   /* base_m is set */
+    uint8_t timed;   /* the last one ended on its timer, and the train has not come forward 2 W since */
+    uint8_t no_timer; /* this one ends only by coming forward (taken while timed) */
+} hstpf_probation_t;
+
 typedef struct {
     uint32_t magic;
     hstpf_config_t cfg;              /* models/track pointers cleared */
@@ -601,12 +618,9 @@ typedef struct {
     double pend_y;                   /* that fix, absolute m */
     double pend_age_s;               /* time since it */
     uint32_t acquisitions, nonfinite_resets;
-    uint32_t backward;               /* fix pairs refused and locks dropped: the fixes ran backwards */
+    uint32_t backward;               /* fix pairs refused, locks dropped or taken on probation: hstpf_estimate_t */
     double top_m;                    /* furthest posterior position on a fix, absolute m (-inf: none) */
-    double prob_y;                   /* a lock on probation: the fix it was taken on, absolute m */
-    double prob_top;                 /* its furthest posterior position, absolute m */
-    double prob_s;                   /* time since the posterior last fell back from there */
-    uint8_t probation;               /* the lock was taken behind top_m (HSTPF_REF_PROBATION_S) */
+    hstpf_probation_t pr;            /* a lock taken behind top_m */
     hstpf_refine_t rf;
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
     uint8_t fit;
