@@ -333,9 +333,30 @@ static void advance_time(hstpf_t *f, double dt)
     ++f->steps;
 }
 
+/* xi u (m/s^2) for a step whose traction is unknown: what balances the
+ * largest resistance among the models at speed v (each model's own when
+ * v < 0), plus a hair: the train neither speeds up nor slows down in the
+ * mean, and no model holds it at rest (engine.h's rule needs a net force
+ * <= 0 at v = 0). The models' spread in W is small against
+ * accel_unknown_sd, and no weight moves on such a step. */
+static double free_xu(const hstpf_t *f, double v)
+{
+    double xu = -HUGE_VAL;
+    uint16_t l, hint = 0;
+    for (l = 0; l < f->cfg.n_models + (uint16_t)hstpf__refine_on_grid(f); ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const double vl = v >= 0.0 ? v : ((double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0);
+        const double g = f->have_fix ? (double)hstpf__track_acc(f, &hint, m->s_mean) : 0.0;
+        const double w = (double)m->k0 + ((double)m->k1 + (double)m->k2 * vl) * vl + g;
+        xu = w > xu ? w : xu;
+    }
+    return xu + 1e-3;
+}
+
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
 {
-    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh;
+    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh, free_run;
+    double xu;
     const hstpf__engine_t *e;
     hstpf__step_t st;
     if (f == NULL || in == NULL) {
@@ -344,13 +365,15 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (f->magic != HSTPF_MAGIC) {
         return HSTPF_E_INIT;
     }
-    if (!hstpf__fin(in->dt_s) || !hstpf__fin(in->traction) || (has_y && !hstpf__fin(in->position_m))) {
+    free_run = in->traction_unknown != 0; /* traction is then not read */
+    if (!hstpf__fin(in->dt_s) || (!free_run && !hstpf__fin(in->traction)) ||
+        (has_y && !hstpf__fin(in->position_m))) {
         return HSTPF_E_NONFINITE;
     }
     if (!(in->dt_s > 0.0 && in->dt_s <= HSTPF_DT_MAX_S)) {
         return HSTPF_E_DT;
     }
-    if (fabs(in->traction) > HSTPF_U_MAX || (has_y && fabs(in->position_m) > HSTPF_POS_MAX_M)) {
+    if ((!free_run && fabs(in->traction) > HSTPF_U_MAX) || (has_y && fabs(in->position_m) > HSTPF_POS_MAX_M)) {
         return HSTPF_E_RANGE;
     }
     if (f->have_fix && in->dt_s > f->cfg.max_gap_s) {
@@ -360,7 +383,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (!f->have_fix) {
         advance_time(f, in->dt_s);
         if (has_y) {
-            (void)hstpf__acquire(f, in->position_m, f->xi * in->traction);
+            /* unknown traction: the pair's own speed sets the balance */
+            const double t = f->pend_age_s, v = f->have_pend && t > 0.0 ? (in->position_m - f->pend_y) / t : 0.0;
+            (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
         }
         f->standstill = 0;
         f->weights_wait = 0;
@@ -383,7 +408,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             ++f->reacquired;
             hstpf__drop_lock(f, 1);
             advance_time(f, in->dt_s);
-            (void)hstpf__acquire(f, in->position_m, f->xi * in->traction);
+            (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, -1.0) : f->xi * in->traction);
             hstpf__update_declaration(f, in->dt_s, 0);
             return HSTPF_OK;
         }
@@ -394,11 +419,20 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     has_y = has_y && !gated;
     /* all checks passed: from here on the step cannot fail */
     e = hstpf__engine_of(f);
+    xu = free_run ? free_xu(f, -1.0) : f->xi * in->traction;
     st.dt = in->dt_s;
-    st.xu = f->xi * in->traction;
+    st.xu = xu;
     st.yr = has_y ? in->position_m - f->origin_m : 0.0;
-    st.scale = (double)(real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
+    st.scale = sqrt(in->dt_s / f->cfg.dt_nominal_s);
+    if (free_run && f->noise_mom[3] > 0.0) {
+        /* both noises widened by the factor that puts the unknown
+         * acceleration's sd, accel_unknown_sd T, into the speed noise's */
+        const double r = f->cfg.accel_unknown_sd * in->dt_s / f->noise_mom[3];
+        st.scale = sqrt(st.scale * st.scale + r * r);
+    }
+    st.scale = (double)(real)st.scale;
     st.has_y = has_y;
+    st.free_run = free_run;
     e->predict_update(f, &st);
     if (f->rf.active) {
         hstpf__refine_update(f, &st);
@@ -423,7 +457,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at
      * the weight floor that happens to lie near it would take all the
      * weight for that step. A second one in a row moves them as usual. */
-    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active;
+    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run;
     if (weigh) {
         update_model_weights(f);
     }

@@ -37,6 +37,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->withdraw_threshold = 0.5;
     cfg->max_gap_s = 30.0;
     cfg->gate_m = 1000.0;
+    cfg->accel_unknown_sd = 0.5;
     cfg->reacquire_after = 5;
     cfg->refine = 1;
     cfg->refine_prior_q = 0.01;
@@ -83,6 +84,7 @@ static const range_t ranges[] = {
     ROW(withdraw_threshold, 0.0, 0, 1.0, 1, HSTPF_E_CONFIG),
     ROW(max_gap_s, 1e-6, 0, HSTPF_DT_MAX_S, 0, HSTPF_E_CONFIG),
     ROW(gate_m, 0.0, 0, HSTPF_POS_MAX_M, 0, HSTPF_E_CONFIG),
+    ROW(accel_unknown_sd, 0.0, 1, 10.0, 0, HSTPF_E_CONFIG),
     ROW(e_blur_sd, 0.0, 0, 100.0, 0, HSTPF_E_CONFIG),
     ROW(refine_prior_q, 0.0, 0, 0.5, 0, HSTPF_E_CONFIG),
     ROW(refine_spread, 0.0, 0, 1.0, 0, HSTPF_E_CONFIG),

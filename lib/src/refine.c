@@ -140,11 +140,14 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
     if (c->n_track > 0u) {
         g = (double)hstpf__track_acc(f, &r->track_hint, (hstpf_real_t)z[0]);
     }
-    /* st->xu = xi u: the gain k scales the reported traction */
-    a = k * st->xu - xi * (c0 + c1 * vk + c2 * vk * vk) - g;
+    /* st->xu = xi u: the gain k scales the reported traction. With the
+     * traction unknown the acceleration is 0 with the widened noise, not a
+     * function of theta: the step tells theta nothing but through what
+     * the fix says of (s, v) */
+    a = st->free_run ? 0.0 : k * st->xu - xi * (c0 + c1 * vk + c2 * vk * vk) - g;
     vd = v + dt * a;
     f0[1] = dt;
-    r->held = (uint8_t)(v <= 0.0 && p[NZ + 1] <= 0.0 && a <= 0.0);
+    r->held = (uint8_t)(!st->free_run && v <= 0.0 && p[NZ + 1] <= 0.0 && a <= 0.0);
     if (r->held) {
         r->loglik = 0.0;
     } else if (vd < 0.0) {
@@ -156,6 +159,13 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         z[0] += dt * v + st->scale * nm[0];
         z[1] = 0.0;
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
+    } else if (st->free_run) {
+        for (i = 0; i < NZ; ++i) {
+            f1[i] = i == 1 ? 1.0 : 0.0;
+        }
+        z[0] += dt * v + st->scale * nm[0];
+        z[1] = vd + st->scale * nm[2];
+        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3]);
     } else {
         f1[0] = 0.0;
         f1[1] = 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);

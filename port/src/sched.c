@@ -131,6 +131,9 @@ static void emit(hstpfd_sched_t *s, int64_t t_end, int has_pos, double y, int re
     st.pos_stale = (uint8_t)(stale != 0);
     st.trac_stale = s->trac_stale;
     st.no_traction = (uint8_t)!s->have_u;
+    /* a held or assumed traction is no measurement: the library takes the
+     * acceleration as unknown (hstpf_input_t.traction_unknown) */
+    st.in.traction_unknown = (uint8_t)(st.trac_stale || st.no_traction);
     s->t_step = t_end;
     if (has_pos) {
         s->t_fix_step = t_end;

@@ -176,7 +176,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     check_estimate(&est, cfg.n_models);
 
     for (steps = 0; steps < 4000u && in.i < in.n; ++steps) {
-        hstpf_input_t u;
+        hstpf_input_t u = {0};
         const uint8_t op = fuzz_u8(&in);
         if (op == 0xFFu) {
             FUZZ_CHECK(hstpf_reset(&filt) == HSTPF_OK, "reset");
@@ -186,6 +186,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         u.traction = op & 0x20u ? fuzz_double(&in, -1100.0, 1100.0) : 5.0;
         truth_s += 50.0 * (isfinite(u.dt_s) && u.dt_s > 0.0 && u.dt_s <= 60.0 ? u.dt_s : 0.0);
         u.has_position = (uint8_t)(op & 1u);
+        u.traction_unknown = (uint8_t)((op & 0x0Eu) == 0x0Eu); /* one op in eight: traction then not read */
+        if (u.traction_unknown && (op & 0x80u)) {
+            u.traction = NAN; /* an unknown traction is not read, whatever it holds */
+        }
         u.position_m = op & 0x10u ? fuzz_double(&in, -1e8, 1e8) : truth_s + fuzz_range(&in, -5.0, 5.0);
         rc = hstpf_step(&filt, &u);
         FUZZ_CHECK(known_error(rc), "hstpf_step returned %d", (int)rc);

@@ -91,7 +91,7 @@ int main(void)
         return 1;
     }
     for (k = 0; k <= DURATION_S; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         /* the sample at t = k: measure, then apply the traction that gives
          * the commanded acceleration at the true state */
         const double y = s + sd_e * gauss();

@@ -914,6 +914,58 @@ static void test_probation_guards(void **state)
     }
 }
 
+/* The traction unknown for 30 s while the train departs (a traction unit
+ * that reboots at a station; hstpfd feeds hstpf_input_t.traction_unknown
+ * when the traction is stale). Fed the last traction (the holding brake)
+ * instead, every engine held the train at rest and published speed 0 +- 0
+ * while it moved off, 14 m off with an sd of 0.2 m (a tester's log). Now,
+ * every engine: no model holds it (standstill 0), no weight moves (the q's
+ * are those before the gap, bit for bit), the traction is not read (NaN),
+ * and every valid step is within 5 sd (+1 m, +0.3 m/s) of the truth. */
+static void test_traction_unknown(void **state)
+{
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e, e59;
+        int n_valid = 0, l;
+        base_config(&c, engines[i], 2);
+        start(&c);
+        memset(&e59, 0, sizeof e59);
+        for (k = 0; k < 150; ++k) {
+            const double t = k > 62 ? k - 62.0 : 0.0, v = 0.5 * t, y = Y0 + 0.25 * t * t + 2.0 * sin(1.7 * k);
+            hstpf_input_t in = tu_input(1.0, k < 60 ? -50.0 : hstpf_resistance(&rows[0], v) + 0.5 / f.xi, y, 1);
+            in.traction_unknown = (uint8_t)(k >= 60 && k < 90);
+            if (in.traction_unknown) {
+                in.traction = NAN;
+            }
+            assert_int_equal(hstpf_step(&f, &in), HSTPF_OK);
+            e = est();
+            if (k == 59) {
+                assert_true(e.standstill && e.valid);
+                e59 = e;
+            }
+            if (in.traction_unknown) {
+                assert_int_equal(e.standstill, 0);
+                for (l = 0; l < 2; ++l) {
+                    assert_true(e.model[l].q == e59.model[l].q);
+                }
+                assert_true(e.q_offtable == e59.q_offtable);
+            }
+            if (k >= 60 && e.valid) {
+                const double ep = fabs(e.position_m - (Y0 + 0.25 * t * t)), ev = fabs((double)e.speed_mps - v);
+                ++n_valid;
+                if (ep > 5.0 * e.position_sd_m + 1.0 || ev > 5.0 * (double)e.speed_sd_mps + 0.3) {
+                    fail_msg("engine %d, t = %d: position %.2f m off (sd %.2f), speed %.2f m/s off (sd %.2f)", i, k,
+                             ep, e.position_sd_m, ev, (double)e.speed_sd_mps);
+                }
+            }
+        }
+        assert_true(n_valid >= 85); /* of 90: the estimate stays available */
+    }
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -1266,6 +1318,7 @@ int main(void)
         cmocka_unit_test(test_fix_offset_not_backward),
         cmocka_unit_test(test_reference_restart_tracked),
         cmocka_unit_test(test_probation_guards),
+        cmocka_unit_test(test_traction_unknown),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),

@@ -45,7 +45,7 @@ static void test_long_run_blend(void **state)
         assert_int_equal(hstpf_init(&filt, sizeof filt, &cfg), HSTPF_OK);
         hstpf_sim_init(&sim, &sc);
         while (sim.t <= 3600.0) {
-            hstpf_input_t in;
+            hstpf_input_t in = {0};
             hstpf_sim_next_input(&sim, &smp, &in);
             assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
             assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);

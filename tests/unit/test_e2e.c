@@ -115,7 +115,7 @@ static void run_case(uint64_t sim_seed, run_result_t *res)
     hstpf_sim_init(&sim, &sc);
 
     while (sim.t <= DURATION_S) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         int32_t err;
         hstpf_sim_next_input(&sim, &smp, &in); /* traction of the step just ended */
         err = hstpf_step(&filt, &in);

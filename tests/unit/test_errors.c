@@ -302,7 +302,7 @@ static void test_step_errors(void **state)
 {
     const double nan = NAN, inf = INFINITY;
     hstpf_config_t good;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     double y = 120.0;
     int i;
     (void)state;
@@ -375,7 +375,7 @@ static void test_step_errors(void **state)
 static void test_step_errors_before_fix(void **state)
 {
     hstpf_config_t good;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     (void)state;
     good_config(&good);
     tu_workspace(&good, 0);
@@ -419,7 +419,7 @@ static void assert_same_estimate(const hstpf_t *a, const hstpf_t *b)
 static void test_outlier_gate(void **state)
 {
     hstpf_config_t good;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     hstpf_estimate_t est;
     double y = 120.0;
     int k;

@@ -115,7 +115,7 @@ static void gaussian_vs_kalman(uint8_t lattice)
     hstpf_theta_t m[3];
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     double max_true = 0.0, max_all = 0.0, sum_true = 0.0, sum_all = 0.0;
     uint32_t hits_g[3] = {0, 0, 0}, hits_k[3] = {0, 0, 0};
     int k, n = 0, floored = 0;
@@ -204,7 +204,7 @@ static void test_speed_lattice(void **state)
     hstpf_theta_t m[3];
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     int k, on = 0, off = 0;
     (void)state;
     setup(2, 3, &sc, &c, m);
@@ -283,7 +283,7 @@ static void test_track_vs_kalman(void **state)
     hstpf_theta_t m[3];
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     double mx = 0.0, sum = 0.0;
     int k, n = 0;
     (void)state;
@@ -405,7 +405,7 @@ static void test_case2_vs_particle_reference(void **state)
     assert_int_equal(hstpf_init(&fa, sizeof fa, &c), HSTPF_OK);
     hstpf_sim_init(&sim, &sc);
     for (k = 0; k <= REF_STEPS; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         hstpf_estimate_t e;
         hstpf_sim_next_input(&sim, &ys[k], &in);
         assert_true(in.has_position && in.dt_s == 1.0);
@@ -475,7 +475,7 @@ static void run_case(hstpf_t *f, const hstpf_config_t *c, int paper_case, uint64
     hstpf_theta_t m[3];
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     int k;
     setup(paper_case, seed, &sc, &cc, m);
     hstpf_sim_init(&sim, &sc);
@@ -554,7 +554,7 @@ static void test_extremes(void **state)
     hstpf_sim_config_t sc;
     hstpf_config_t c;
     hstpf_theta_t m[3];
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     int k;
     (void)state;
     setup(2, 1, &sc, &c, m);
@@ -582,7 +582,7 @@ static void constant_run(hstpf_t *f, double v, int steps, uint64_t seed, hstpf_e
 {
     const hstpf_theta_t *crh3 = &hstpf_train_types[2];
     hstpf_rng_t r;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     int k;
     (void)hstpf_rng_seed(&r, seed, 0);
     memset(&in, 0, sizeof in);
@@ -646,7 +646,7 @@ static void test_standstill_gamma(void **state)
     hstpf_theta_t m[3];
     hstpf_estimate_t e;
     hstpf_rng_t r;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     double ymin = 1e300, worst = -1.0;
     int k, i;
     uint16_t l;
@@ -737,7 +737,7 @@ static void rows_run(hstpf_t *f, const hstpf_config_t *c, hstpf_estimate_t *last
     hstpf_sim_config_t sc;
     hstpf_sim_t sim;
     hstpf_sim_sample_t smp;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     int k;
     hstpf_sim_default(&sc);
     sc.seed = 3;

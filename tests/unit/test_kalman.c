@@ -324,7 +324,7 @@ static void nis_run(const hstpf_theta_t *truth, double *nis_mean, double *pos_rm
         assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
         hstpf_sim_init(&sim, &sc);
         while (sim.t <= 900.0) {
-            hstpf_input_t in;
+            hstpf_input_t in = {0};
             hstpf_sim_next_input(&sim, &smp, &in);
             assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
             assert_int_equal(hstpf_estimate(&filt, &est), HSTPF_OK);

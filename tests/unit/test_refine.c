@@ -84,7 +84,7 @@ static void run_line_noise(const hstpf_theta_t *truth, const hstpf_track_seg_t *
     *ever_nofit = 0;
     worst_z = 0.0;
     for (k = 0; k < 2460; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         hstpf_sim_next_input(&sim, &smp, &in);
         if (step_hook != NULL) {
             step_hook(k, &in);
@@ -331,7 +331,7 @@ static void test_off(void **state)
 {
     hstpf_config_t c;
     hstpf_estimate_t e;
-    hstpf_input_t in;
+    hstpf_input_t in = {0};
     uint16_t l;
     double sum = 0.0;
     (void)state;

@@ -58,7 +58,7 @@ static void test_gain_then_table(void **state)
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     for (k = 0; k < 4500; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         hstpf_sim_next_input(&sim, &smp, &in);
         if (k < 3000) {
             in.traction *= 1.3;
@@ -103,7 +103,7 @@ static void test_far_fix_no_gate(void **state)
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     for (k = 0; k < 400; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         hstpf_sim_next_input(&sim, &smp, &in);
         if (k == 300) {
             assert_int_equal(hstpf_estimate(&filt, &before), HSTPF_OK);
@@ -143,7 +143,7 @@ static void test_prior_zero_is_off(void **state)
     tu_workspace(&c_off, 1);
     assert_int_equal(hstpf_init(&off, sizeof off, &c_off), HSTPF_OK);
     for (k = 0; k < 300; ++k) {
-        hstpf_input_t in;
+        hstpf_input_t in = {0};
         hstpf_sim_next_input(&sim, &smp, &in);
         assert_int_equal(hstpf_step(&filt, &in), hstpf_step(&off, &in));
     }

@@ -87,7 +87,7 @@ int main(int argc, char **argv)
     {
         hstpf_sim_sample_t smp;
         while (sim.t <= duration) {
-            hstpf_input_t in;
+            hstpf_input_t in = {0};
             hstpf_sim_next_input(&sim, &smp, &in);
             err = hstpf_step(&filt, &in);
             if (err != HSTPF_OK) {

@@ -308,5 +308,6 @@ void hstpf_sim_next_input(hstpf_sim_t *sim, hstpf_sim_sample_t *smp, hstpf_input
     in->traction = sim->u_prev;
     in->position_m = smp->y;
     in->has_position = (uint8_t)smp->has_y;
+    in->traction_unknown = 0;
     sim->u_prev = smp->u;
 }

@@ -1,0 +1,86 @@
+"""hstpfd through events of a real day, on logs hstpf-simulate writes:
+- the positioning unit starts a new run from 0 at a station (--restart-at):
+  the estimate is invalid while the library checks the new reference, then
+  valid at it, with the weights kept. Before the probation (lib/src/lock.c)
+  it stayed invalid until the train had run the whole distance again;
+- the traction unit is silent for a minute across a departure: the daemon
+  feeds the steps as traction unknown. Before, it fed the last value (the
+  holding brake), and the estimate was published at rest, speed 0 +- 0,
+  while the train moved off."""
+import csv
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from hstpf_tools import simulate
+from hstpf_tools.frames import TRACTION, FrameCodec
+from hstpf_tools.logio import read_log, write_log
+
+
+def _hstpfd(root):
+    exe = Path(os.environ.get("HSTPF_BUILD_DIR", str(root / "build"))) / "port" / "hstpfd"
+    if not exe.is_file():
+        pytest.skip("hstpfd not built (set HSTPF_BUILD_DIR)")
+    return exe
+
+
+def _truth(path):
+    with open(path, newline="") as f:
+        return {round(float(r["time_s"])): (float(r["position_m"]), float(r["speed_mps"])) for r in csv.DictReader(f)}
+
+
+def test_restart_at_a_station(root, tmp_path):
+    exe = _hstpfd(root)
+    log = tmp_path / "run.log"
+    # the line's first station: at rest from about 447 s, departing at 567 s
+    assert simulate.main(["--profile", "line", "--duration", "900", "--seed", "4", "--restart-at", "480",
+                          "-o", str(log), "--json", str(tmp_path / "sim.json")]) == 0
+    subprocess.run([str(exe), "--log", str(log), "--models", "all", "--noise", "case1", "--out",
+                    str(tmp_path / "steps.jsonl"), "--summary", str(tmp_path / "summary.json")],
+                   check=True, capture_output=True)
+    truth = {t: sv[0] for t, sv in _truth(tmp_path / "run_truth.csv").items()}
+    steps = [json.loads(ln) for ln in (tmp_path / "steps.jsonl").read_text().splitlines()]
+    before = [s for s in steps if 300 <= s["t"] < 480]
+    assert all(s["valid"] for s in before)
+    # 5 gated fixes, the acquisition pair, HSTPF_REF_PROBATION_S (30 s) at rest: valid again by 520 s
+    after = [s for s in steps if s["t"] >= 480]
+    invalid = [s["t"] for s in after if not s["valid"]]
+    assert invalid and invalid[0] == 480.0 and max(invalid) <= 520.0
+    late = [s for s in after if s["t"] > 520]
+    assert all(s["valid"] and abs(s["pos"] - truth[round(s["t"])]) < 10.0 for s in late)
+    assert abs(late[0]["pos"]) < 10.0  # the new reference: the train stands at its 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["valid"] and summary["backward"] >= 1 and summary["acquisitions"] == 2
+
+
+def test_traction_gap_across_a_departure(root, tmp_path):
+    exe = _hstpfd(root)
+    log, cut = tmp_path / "run.log", tmp_path / "cut.log"
+    # the line's first station: at rest from about 447 s, departing at about 567 s
+    assert simulate.main(["--profile", "line", "--duration", "800", "--seed", "4", "-o", str(log),
+                          "--json", str(tmp_path / "sim.json")]) == 0
+    tid = FrameCodec().message(TRACTION).frame_id
+    msgs = [m for m in read_log(str(log)) if not (m.arbitration_id == tid and 540.0 <= m.timestamp < 600.0)]
+    write_log(str(cut), msgs)
+    subprocess.run([str(exe), "--log", str(cut), "--models", "all", "--noise", "case1", "--out",
+                    str(tmp_path / "steps.jsonl"), "--summary", str(tmp_path / "summary.json")],
+                   check=True, capture_output=True)
+    truth = _truth(tmp_path / "run_truth.csv")
+    steps = [json.loads(ln) for ln in (tmp_path / "steps.jsonl").read_text().splitlines()]
+    gap = [s for s in steps if 541 <= s["t"] < 600]
+    assert gap and all(s["trac_stale"] for s in gap)
+    moving = [s for s in steps if 540 <= s["t"] < 660 and truth[round(s["t"])][1] > 0.0]
+    assert moving and not any(s["standstill"] for s in moving)
+    n_valid = 0
+    for s in steps:
+        if 540 <= s["t"] < 660 and s["valid"]:
+            p, v = truth[round(s["t"])]
+            n_valid += 1
+            assert abs(s["pos"] - p) <= 5 * s["pos_sd"] + 1.0, s
+            assert abs(s["speed"] - v) <= 5 * s["speed_sd"] + 0.3, s
+    assert n_valid >= 100  # of 120: still published through the gap
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["faults"]["traction_stale"] == 1
