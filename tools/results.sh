@@ -55,12 +55,15 @@ done
 fi
 if section journeys; then
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
-for s in stops day start300 clock+30 clock-30 outage gain5 restart; do
+for s in stops day start300 clock+30 clock-30 outage gain5 restart tracgap; do
   echo "== $s"
   oracle=()
   case $s in stops) oracle=(--oracle) ;; esac
   "$mc" --scenario "$s" --seeds "$seeds" "${oracle[@]}" --json "$out/$s.json" | tee "$out/$s.txt"
 done
+# the traction gap as hstpfd fed it before the twenty-fifth session (the last value), and on the particle engine
+"$mc" --scenario tracgap --seeds "$seeds" --gap-hold | tee "$out/tracgap-hold.txt"
+"$mc" --scenario tracgap --seeds "$seeds" --engine particle | tee "$out/tracgap-particle.txt"
 fi
 if section offtable; then
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"
@@ -148,7 +151,7 @@ done | tee "$out/grid_cells.txt"
 fi
 if section offtable-t; then
 echo "== trains not on Table 1 with Student-t fixes: the grid engine's continuous hypothesis"
-for s in stops-t off15-t grade8-t restart-t; do
+for s in stops-t off15-t grade8-t restart-t tracgap-t; do
   "$mc" --scenario "$s" --seeds "$gseeds" --json "$out/$s.json" | tee "$out/$s.txt"
 done
 # the line with stops with every row on the grid: the truth's declaration, paired with the defaults' 3 rows

@@ -222,3 +222,16 @@ def test_restarts_row(tmp_path):
     assert len(table) == 3  # header, rule, restart (restart-t absent)
     cells = [c.strip() for c in table[2].strip("|").split("|")]
     assert cells == ["`restart`", "170 of 170", "35 / 36 / 61", "0", "97.7%", "6.11", "2 (1.2%)"]
+
+
+def test_tracgaps_row(tmp_path):
+    # hstpf-mc's own wording (the tracgap scenario's line)
+    (tmp_path / "tracgap-hold.txt").write_text(
+        "traction gap of 20-60 s from 1010 s (the last traction fed): valid steps more than 5 sd off in it and "
+        "30 s after: 2851 in 154 of 170 runs; largest speed error at a valid step 7.75 m/s; standstill published "
+        "while the train moved: 1946 steps; the weights' TV across the gap median 0.0050 max 0.7688\n")
+    table = rt.tracgaps(tmp_path).splitlines()
+    assert len(table) == 3
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells == ["`tracgap-hold`", "the last traction fed (before)", "2851 (154 of 170)", "7.75", "1946",
+                     "0.0050 / 0.7688"]

@@ -86,6 +86,27 @@ def restarts(d: Path) -> str:
     return "\n".join(out)
 
 
+TRACGAPS = [("tracgap", "traction unknown (the default)"), ("tracgap-hold", "the last traction fed (before)"),
+            ("tracgap-particle", "traction unknown, particle engine"), ("tracgap-t", "traction unknown, Student-t fixes (grid)")]
+
+
+def tracgaps(d: Path) -> str:
+    """The traction unit silent across a departure (hstpf-mc's tracgap
+    scenarios): what was published meanwhile."""
+    out = ["| scenario | what the filter is fed | valid steps > 5 sd off in the gap and 30 s after (runs) | largest speed "
+           "error at a valid step [m/s] | standstill while the train moved [steps] | weights' TV across the gap, "
+           "median / max |", "|" + "---|" * 6]
+    for s, what in TRACGAPS:
+        if not (d / f"{s}.txt").exists():
+            continue
+        g = last(d / f"{s}.txt", "traction gap")
+        out.append("| `{}` | {} | {} ({}) | {} | {} | {} / {} |".format(
+            s, what, num(r"30 s after: (\d+)", g), num(r"30 s after: \d+ in (\d+ of \d+) runs", g),
+            num(r"at a valid step ([\d.]+) m/s", g), num(r"train moved: (\d+) steps", g),
+            num(r"gap median ([\d.]+)", g), num(r"gap median [\d.]+ max ([\d.]+)", g)))
+    return "\n".join(out)
+
+
 def far_split(path: Path) -> str:
     """The runs whose truth is >= 10 % from every row (issue 10's off-table
     runs): how many, 'no type fits' at the end, a type declared; '-' for an
@@ -354,6 +375,8 @@ def main(argv=None) -> int:
         print(journeys(d))
         print("\n### The reference restarted at a stop\n")
         print(restarts(d))
+        print("\n### The traction unknown across a departure\n")
+        print(tracgaps(d))
         print("\n### Trains not on Table 1\n")
         print(offtable(d))
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_T):

@@ -350,7 +350,8 @@ typedef struct {
     size_t workspace_size;       /**< bytes at workspace (0) */
 } hstpf_config_t;
 
-/** One step's inputs. */
+/** One step's inputs. Initialise it whole (= {0}, or memset) and set the
+ *  fields: a field added in a later version then reads 0, its default. */
 typedef struct {
     double dt_s;         /**< step length T, (0, HSTPF_DT_MAX_S] */
     double traction;     /**< u over the step, N/kN (+ traction, - braking) */
