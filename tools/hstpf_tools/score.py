@@ -7,10 +7,18 @@ whatever the bus or estimator latency. Other frame times are mapped to
 simulation time in one of two ways:
   inputs  the recorded log also holds the Position frames that were on the
           bus; each one is found by content in the simulated input log
-          (--input-log), whose frame times are simulation times (+ its
-          first timestamp). An output frame gets the time of the latest
-          input position seen before it. Exact at any replay speed and with
-          faults (corrupted or injected frames simply do not match).
+          (--input-log), whose frame times are t0 + simulation time (--t0;
+          by default 0 when the input log starts within the truth's span,
+          as hstpf-simulate writes it, whole or cut, else its first
+          timestamp). A payload the input log holds more than once (a
+          position frame without a fix, PosValid 0, repeats with the E2E
+          counter every 15 frames) is matched in order: the occurrence
+          nearest the time the frame is due at, from the frame matched
+          before it (the next input frame, or later by the bus time since
+          times the replay's rate when frames were lost). An output frame
+          gets the time of the latest input position seen before it. Exact
+          at any replay speed and with faults (corrupted or injected frames
+          simply do not match).
   time    simulation time = (timestamp - t0) x speed (--t0, --speed): for a
           log whose timestamps are already simulation times (an offline
           run that stamps outputs with input times), or a plain replay.
@@ -63,7 +71,64 @@ def w_rms_rel(est: Theta, true: Theta) -> float:
     return float(np.sqrt(np.mean(((we - wt) / wt) ** 2)))
 
 
-def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, float], t0: float,
+class InputLog:
+    """The position frames of the simulated input log: their simulation
+    times (log time - t0) in log order, and where each payload occurs."""
+
+    def __init__(self, msgs, pos_id: int, t0: float):
+        pos = [m for m in msgs if m.arbitration_id == pos_id and is_hstpf_frame(m)]
+        self.times = np.array([m.timestamp - t0 for m in pos], dtype=float)
+        occ: Dict[bytes, List[int]] = {}
+        for j, m in enumerate(pos):
+            occ.setdefault(bytes(m.data), []).append(j)
+        self.occ = {k: np.array(v) for k, v in occ.items()}
+
+    def match(self, rec_msgs, pos_id: int, speed: Optional[float] = None) -> Dict[int, float]:
+        """Simulation time of each recorded position frame found in the input
+        log, by its index in rec_msgs. A payload that occurs once is that
+        frame. One that occurs more than once (PosValid 0 frames repeat byte
+        for byte every 15 frames, the E2E counter's cycle) is the occurrence
+        nearest the time it is due at, reckoned from the frame matched just
+        before it (before the first unique one: just after it): the next
+        input frame in the log, or, when more bus time has gone by, that
+        time by the replay's rate (speed, else measured on the unique
+        frames), so frames the daemon or the bus dropped are skipped. In
+        order and without losses the k-th echo of a payload is its k-th
+        occurrence; a duplicate (the same frame again) is the same one."""
+        cand = [(i, m.timestamp, self.occ[bytes(m.data)]) for i, m in enumerate(rec_msgs)
+                if m.arbitration_id == pos_id and is_hstpf_frame(m) and bytes(m.data) in self.occ]
+        if not cand:
+            return {}
+        times = self.times
+        rate = speed
+        uniq = np.array([(ts, times[o[0]]) for _, ts, o in cand if len(o) == 1]).reshape(-1, 2)
+        if rate is None and len(uniq) > 10:
+            d_ts, d_sim = np.diff(uniq[:, 0]), np.diff(uniq[:, 1])
+            ok = (d_ts > 0) & (d_sim > 0)
+            if ok.sum() > 10:
+                rate = float(np.median(d_sim[ok] / d_ts[ok]))
+        got: List[int] = [0] * len(cand)
+
+        def pick(k: int, ref: Optional[int], step: int) -> int:
+            _, ts, o = cand[k]
+            if len(o) == 1 or ref is None:
+                return int(o[0])
+            jr, ts_r = got[ref], cand[ref][1]
+            due = times[jr + step] if 0 <= jr + step < len(times) else times[jr]
+            if rate is not None:  # more bus time than one frame's since the reference: frames were lost
+                by_rate = times[jr] + rate * (ts - ts_r)
+                due = max(due, by_rate) if step > 0 else min(due, by_rate)
+            return int(o[np.argmin(np.abs(times[o] - due))])
+
+        first = next((k for k, c in enumerate(cand) if len(c[2]) == 1), 0)
+        for k in range(first, len(cand)):
+            got[k] = pick(k, k - 1 if k > first else None, 1)
+        for k in range(first - 1, -1, -1):
+            got[k] = pick(k, k + 1, -1)
+        return {cand[k][0]: float(times[got[k]]) for k in range(len(cand))}
+
+
+def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog], t0: float,
             speed: Optional[float]):
     """Decoded output series with simulation times. speed: the replay's
     speed-up (None: 1 for time alignment; measured from the inputs for
@@ -79,8 +144,9 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # silence) holds a prediction, not the estimate at that input's time:
     # with inputs alignment it cannot be timed, so it is not scored.
     foreign = 0  # 29-bit frames: never ours, whatever their ID (as hstpfd)
-    matched = [m for m in rec_msgs if m.arbitration_id == pos_id and is_hstpf_frame(m) and bytes(m.data) in input_map]
-    in_ts = [m.timestamp for m in matched]
+    match = inputs.match(rec_msgs, pos_id, speed) if inputs is not None else {}
+    matched = sorted(match)  # indices in rec_msgs
+    in_ts = [rec_msgs[i].timestamp for i in matched]
     gaps = np.diff(in_ts) if len(in_ts) > 1 else np.array([np.inf])
     max_age = 3.0 * float(np.median(gaps)) if len(gaps) else np.inf
     # For dating by EstTime when nothing else does: simulation seconds per
@@ -88,7 +154,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
     # (stalls and their bursts do not move it). hstpfd runs its predictions
     # on the receive time less the latest fix's latency, so a prediction
     # lies near the latest input's time plus the bus time since it, at that rate.
-    in_sim = np.array([input_map[bytes(m.data)] for m in matched])
+    in_sim = np.array([match[i] for i in matched])
     rate = speed if speed is not None else 1.0
     if speed is None and len(in_ts) > 10:
         d_ts, d_sim = np.diff(np.array(in_ts)), np.diff(in_sim)
@@ -109,7 +175,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
             return
         series[name].append((t, sig))
 
-    for m in rec_msgs:
+    for idx, m in enumerate(rec_msgs):
         if not is_hstpf_frame(m):  # a remote or CAN FD frame with one of our IDs: hstpfd's format error
             foreign += int(m.is_extended_id and not m.is_error_frame)
             name = None if m.is_extended_id or m.is_error_frame else codec.message_name(m.arbitration_id)
@@ -118,7 +184,7 @@ def collect(rec_msgs, codec: FrameCodec, align: str, input_map: Dict[bytes, floa
                 e2e_results[name]["format"] += 1
             continue
         if m.arbitration_id == pos_id:
-            t = input_map.get(bytes(m.data))
+            t = match.get(idx)
             if t is not None:
                 t_sim = t
                 t_in = m.timestamp
@@ -531,20 +597,17 @@ def _main(argv) -> int:
         codec = FrameCodec(a.dbc)  # each frame's receiver as the DBC has it: a restart after a silence is no jump
     except Exception as exc:  # missing or unreadable DBC
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
-    input_map: Dict[bytes, float] = {}
+    inputs: Optional[InputLog] = None
     if align == "inputs":
         inp = cli.load_log(a.input_log)
-        pos_id = codec.message(POSITION).frame_id
         t_first = inp[0].timestamp if inp else 0.0
-        for m in inp:
-            if m.arbitration_id == pos_id and is_hstpf_frame(m):
-                input_map.setdefault(bytes(m.data), m.timestamp - t_first)
+        inputs = InputLog(inp, codec.message(POSITION).frame_id, t_first)
     try:
         truth = read_truth(a.truth)
     except (KeyError, ValueError, IndexError) as exc:
         raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
     rec = cli.load_log(a.log)
-    series, e2e_res = collect(rec, codec, align, input_map, a.t0, a.speed)
+    series, e2e_res = collect(rec, codec, align, inputs, a.t0, a.speed)
     times = [t for k, v in series.items() if isinstance(v, list) for t, _ in v]
     tt = truth["time_s"]
     if times and not any(tt[0] - 1.0 <= t <= tt[-1] + 1.0 for t in times):
