@@ -203,22 +203,24 @@ def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog],
         if sig is None:
             continue
         t = t_sim if align == "inputs" else (m.timestamp - t0) * (speed if speed is not None else 1.0)
-        if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 and fix_in is not None \
-                and t_sim is not None:
+        if name == EST_QUALITY and align == "inputs" and sig.get("EstTimeValid", 0) >= 0.5 \
+                and (fix_in is not None or prev_est is not None) and t_sim is not None:
             # the estimate's own time, on the fix clock. A step on a fix has
             # that fix's FixTime: the latest recorded input with it dates the
             # estimate exactly. A predict-only step lies after the estimate
             # before it (steps never go back) by less than a wrap when the
-            # two are close on the bus. Otherwise (the first estimate, or one
-            # after a long silence of the outputs): from the latest input's
-            # time and the bus time since, below.
+            # two are close on the bus (also when the latest inputs carry no
+            # fix time: PosValid 0, a tunnel). Otherwise (the first estimate,
+            # or one after a long silence of the outputs): from the latest
+            # input's time and the bus time since, below, when that input
+            # has a fix time.
             est_ms = int(sig["EstTime"])
             t_est = fix_sim.get(est_ms)
             if t_est is not None and t_sim - t_est > FIX_TIME_WRAP_MS / 2000.0:
                 t_est = None  # that input is more than half a wrap old: another fix's time
             if t_est is None and prev_est is not None and (m.timestamp - prev_est[2]) * rate < FIX_TIME_WRAP_MS / 2000.0:
                 t_est = prev_est[0] + ((est_ms - prev_est[1]) % FIX_TIME_WRAP_MS) / 1000.0
-            if t_est is None:
+            if t_est is None and fix_in is not None:
                 # hstpfd never predicts past the latest input plus the bus
                 # time since it (a late publication only makes the estimate
                 # older than that): the latest time with that EstTime not
@@ -226,13 +228,14 @@ def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog],
                 expect_ms = rate * (m.timestamp - t_in) * 1000.0  # how far past the latest input
                 d = -((expect_ms + 500.0 - (est_ms - fix_in)) % FIX_TIME_WRAP_MS)  # in (-wrap, 0]
                 t_est = t_sim + (expect_ms + 500.0 + d) / 1000.0
-            prev_est = (t_est, est_ms, m.timestamp)
-            if pending is not None:
-                series[EST_STATE].append((t_est, pending[2]))
-                n_dated += 1
-                pending = None
-            series[name].append((t_est, sig))
-            continue
+            if t_est is not None:
+                prev_est = (t_est, est_ms, m.timestamp)
+                if pending is not None:
+                    series[EST_STATE].append((t_est, pending[2]))
+                    n_dated += 1
+                    pending = None
+                series[name].append((t_est, sig))
+                continue
         if pending is not None:
             keep(EST_STATE, *pending)
             pending = None
