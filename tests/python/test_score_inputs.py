@@ -140,3 +140,84 @@ def test_tunnel_scored_as_the_daemon_stepped(root, tunnel_run, tmp_path):
     assert res["state_frames"] == n
     assert res["position_rms_m"] == pytest.approx(pos_rms, rel=1e-3, abs=1e-3)
     assert res["speed_rms_mps"] == pytest.approx(spd_rms, rel=1e-3, abs=1e-3)
+
+
+CUT = 250.0  # simulation time where the input log starts: a daemon restarted there
+
+
+@pytest.fixture(scope="module")
+def cut_run(tmp_path_factory):
+    """A 600 s run simulated at log times t0 + simulation time (t0 0 and
+    1.7e9), and each input log cut at simulation time 250 s; the truth is
+    the whole run's."""
+    d = tmp_path_factory.mktemp("cut")
+    for t0 in (0.0, 1.7e9):
+        tag = f"t0_{t0:.0f}"
+        assert simulate.main(["-o", str(d / f"{tag}.log"), "--truth", str(d / "run_truth.csv"), "--duration",
+                              "600", "--seed", "4", "--t0", repr(t0), "--json", str(d / "sim.json")]) == 0
+        msgs = read_log(str(d / f"{tag}.log"))
+        write_log(str(d / f"{tag}_cut.log"), [m for m in msgs if m.timestamp - t0 >= CUT])
+    return d, _truth(d / "run_truth.csv")
+
+
+def _offline_outputs(log, rows, t0):
+    """The input log with a scripted output after each position frame."""
+    codec = FrameCodec()
+    msgs = []
+    for m in read_log(str(log)):
+        msgs.append(m)
+        if m.arbitration_id == 0x100:
+            msgs += [message(m.timestamp, fid, data) for fid, data in _scripted_outputs(codec, m.timestamp - t0, rows)]
+    return msgs
+
+
+@pytest.mark.parametrize("t0, args", [(0.0, ()), (0.0, ("--t0", "0")), (1.7e9, ("--t0", "1.7e9")),
+                                      (1.7e9, ())])
+def test_input_log_cut_mid_run(cut_run, tmp_path, capfd, t0, args):
+    """An input log that starts at simulation time 250 s: its frames are
+    dated log time - t0 (--t0; by default 0 for a log that starts within the
+    truth's span, as hstpf-simulate writes it), not from its first frame
+    (28-33 km RMS in the tester's runs). A log simulated with --t0 and cut
+    needs --t0: without it, it is taken from its first frame, and a warning
+    says its positions do not follow the truth."""
+    d, rows = cut_run
+    tag = f"t0_{t0:.0f}"
+    rec = tmp_path / "bus.log"
+    write_log(str(rec), _offline_outputs(d / f"{tag}_cut.log", rows, t0))
+    res = _score(rec, d, tmp_path, *args, log=f"{tag}_cut.log")
+    err = capfd.readouterr().err
+    if t0 and not args:
+        assert res["input_t0"] == pytest.approx(t0 + CUT)
+        assert res["position_rms_m"] > 1000.0
+        assert "warning" in err and "--t0" in err
+        return
+    assert res["input_t0"] == t0
+    assert "warning" not in err
+    assert res["state_frames"] == pytest.approx((600 - CUT) * 10, abs=1)
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.01)
+    assert res["speed_rms_mps"] == pytest.approx(0.1, abs=0.01)
+
+
+def test_uncut_log_with_t0_needs_no_option(cut_run, tmp_path, capfd):
+    """A whole log simulated with --t0 starts at simulation time 0: its
+    first frame dates it without --t0, as before."""
+    d, rows = cut_run
+    rec = tmp_path / "bus.log"
+    write_log(str(rec), _offline_outputs(d / "t0_1700000000.log", rows, 1.7e9))
+    res = _score(rec, d, tmp_path, log="t0_1700000000.log")
+    assert "warning" not in capfd.readouterr().err
+    assert res["input_t0"] == 1.7e9
+    assert res["position_rms_m"] == pytest.approx(1.0, abs=0.01)
+
+
+def test_daemon_restarted_mid_run_scored(root, cut_run, tmp_path):
+    """hstpfd started on the log cut at 250 s (the tester's restart case):
+    the score finds the RMS errors of its own step stream."""
+    d, rows = cut_run
+    bus, steps = _daemon(root, d, d / "t0_0_cut.log", "cut")
+    n, pos_rms, spd_rms = _steps_rms(steps, rows)
+    assert n > 300
+    res = _score(bus, d, tmp_path, log="t0_0_cut.log")
+    assert res["state_frames"] == n
+    assert res["position_rms_m"] == pytest.approx(pos_rms, rel=1e-3, abs=1e-3)
+    assert res["speed_rms_mps"] == pytest.approx(spd_rms, rel=1e-3, abs=1e-3)

@@ -128,6 +128,33 @@ class InputLog:
         return {cand[k][0]: float(times[got[k]]) for k in range(len(cand))}
 
 
+# the input log's positions this far (median) from the truth's: its t0 is wrong
+INPUT_OFFSET_WARN_M = 100.0
+
+
+def input_offset_m(msgs, codec: FrameCodec, t0: float, truth) -> Optional[float]:
+    """Median |Position - truth position| over the input log's valid
+    position frames within the truth's span, each at log time - t0; None
+    without one. Metres of measurement noise when t0 is right."""
+    pos_id = codec.message(POSITION).frame_id
+    msg = codec.message(POSITION)
+    tt = truth["time_s"]
+    t, y = [], []
+    for m in msgs:
+        if m.arbitration_id != pos_id or not is_hstpf_frame(m) or not tt[0] <= m.timestamp - t0 <= tt[-1]:
+            continue
+        try:
+            sig = msg.decode(bytes(m.data), decode_choices=False)
+        except Exception:  # a frame cantools cannot decode (wrong length): not a position
+            continue
+        if sig.get("PosValid", 0) >= 0.5:
+            t.append(m.timestamp - t0)
+            y.append(float(sig["Position"]))
+    if not t:
+        return None
+    return float(np.median(np.abs(np.array(y) - np.interp(np.array(t), tt, truth["position_m"]))))
+
+
 def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog], t0: float,
             speed: Optional[float]):
     """Decoded output series with simulation times. speed: the replay's
@@ -567,7 +594,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--input-log", help="the simulated input log (for --align inputs)")
     p.add_argument("--align", choices=("auto", "inputs", "time"), default="auto",
                    help="auto: inputs when --input-log is given, else time")
-    p.add_argument("--t0", type=float, default=0.0, help="log timestamp of simulation time 0 (time alignment; 0)")
+    p.add_argument("--t0", type=float, default=None,
+                   help="log timestamp of simulation time 0: in the input log (inputs alignment; default 0 when "
+                        "the input log starts within the truth's span, else its first timestamp), in the recorded "
+                        "log (time alignment; default 0)")
     p.add_argument("--speed", type=float, default=None,
                    help="replay speed-up (time alignment: 1; inputs alignment: measured from the inputs, used "
                         "only to date an estimate after a silence of the outputs)")
@@ -600,19 +630,26 @@ def _main(argv) -> int:
         codec = FrameCodec(a.dbc)  # each frame's receiver as the DBC has it: a restart after a silence is no jump
     except Exception as exc:  # missing or unreadable DBC
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
-    inputs: Optional[InputLog] = None
-    if align == "inputs":
-        inp = cli.load_log(a.input_log)
-        t_first = inp[0].timestamp if inp else 0.0
-        inputs = InputLog(inp, codec.message(POSITION).frame_id, t_first)
     try:
         truth = read_truth(a.truth)
     except (KeyError, ValueError, IndexError) as exc:
         raise cli.CliError(cli.EXIT_INPUT, f"{a.truth}: not a truth CSV of hstpf-simulate ({exc})") from exc
-    rec = cli.load_log(a.log)
-    series, e2e_res = collect(rec, codec, align, inputs, a.t0, a.speed)
-    times = [t for k, v in series.items() if isinstance(v, list) for t, _ in v]
     tt = truth["time_s"]
+    inputs: Optional[InputLog] = None
+    t0 = 0.0 if a.t0 is None else a.t0
+    if align == "inputs":
+        inp = cli.load_log(a.input_log)
+        if a.t0 is None and inp and not tt[0] - 1.0 <= inp[0].timestamp <= tt[-1]:
+            t0 = inp[0].timestamp  # simulated with --t0 (hstpf-simulate's default is 0): from its start
+        inputs = InputLog(inp, codec.message(POSITION).frame_id, t0)
+        off = input_offset_m(inp, codec, t0, truth)
+        if off is not None and off > INPUT_OFFSET_WARN_M:
+            print(f"warning: {a.input_log}: its positions lie {off:.0f} m (median) from the truth's at simulation "
+                  f"time = log time - {t0:.6g}: pass --t0 (the input log's time of simulation time 0)",
+                  file=sys.stderr)
+    rec = cli.load_log(a.log)
+    series, e2e_res = collect(rec, codec, align, inputs, t0, a.speed)
+    times = [t for k, v in series.items() if isinstance(v, list) for t, _ in v]
     if times and not any(tt[0] - 1.0 <= t <= tt[-1] + 1.0 for t in times):
         raise cli.CliError(cli.EXIT_NO_TRAFFIC, f"no estimator frame of {a.log} falls within the truth's "
                            f"{tt[0]:g}-{tt[-1]:g} s (they lie at {min(times):.6g}-{max(times):.6g} s): "
@@ -620,6 +657,8 @@ def _main(argv) -> int:
     res = metrics(series, truth)
     res["inputs"] = fix_time_stats(rec, a.dbc)
     res["align"] = align
+    if align == "inputs":
+        res["input_t0"] = t0
     res["output_e2e"] = e2e_res
     res["state_frames_dated"] = series.pop("dated_by_est_time")
     res["ignored_29bit_frames"] = series.pop("ignored_29bit_frames")
