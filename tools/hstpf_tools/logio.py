@@ -1,4 +1,5 @@
 """candump logs through python-can's readers and writers."""
+import gzip
 import io
 import math
 import sys
@@ -17,15 +18,35 @@ def message(t: float, frame_id: int, data: bytes, channel: str = "vcan0") -> can
                        channel=channel, is_rx=False)
 
 
+class CandumpLogWriter(can.CanutilsLogWriter):
+    """python-can's candump -L writer, with each message's stamp as given.
+    can.CanutilsLogWriter (4.6) writes a stamp earlier than the first
+    message's as the first's (its docstring says the previous message's; it
+    never updates last_timestamp): a log with a backward clock step could
+    not be written, and hstpf-replay and hstpfd take a log in its order,
+    backward steps included. A message without a stamp still gets the
+    previous one (python-can's rule)."""
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.timestamp is not None:
+            self.last_timestamp = msg.timestamp  # the floor python-can clamps to: this stamp itself
+        super().on_message_received(msg)
+
+
 def log_writer(path: str, channel: str = "vcan0"):
-    """can.Logger for path (its suffix picks the format: .log is candump -L);
-    '-' is candump -L text on stdout."""
+    """A python-can writer for path, its suffix picking the format as
+    can.Logger does; candump -L (.log, .log.gz, and '-': text on stdout)
+    through CandumpLogWriter, every stamp as given."""
     if str(path) == "-":
         from .cli import stdout
 
-        return can.CanutilsLogWriter(stdout(), channel=channel)
-    kw = {"channel": channel} if str(path).endswith(".log") else {}
-    return can.Logger(path, **kw)
+        return CandumpLogWriter(stdout(), channel=channel)
+    name = str(path).lower()
+    if name.endswith(".log"):
+        return CandumpLogWriter(path, channel=channel)
+    if name.endswith(".log.gz"):  # as can.Logger compresses a text format
+        return CandumpLogWriter(gzip.open(path, "wt"), channel=channel)
+    return can.Logger(path)
 
 
 def write_log(path: str, msgs: Iterable[can.Message], channel: str = "vcan0") -> int:
