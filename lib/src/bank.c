@@ -423,16 +423,14 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     st.dt = in->dt_s;
     st.xu = xu;
     st.yr = has_y ? in->position_m - f->origin_m : 0.0;
-    st.scale = sqrt(in->dt_s / f->cfg.dt_nominal_s);
-    if (free_run && f->noise_mom[3] > 0.0) {
-        /* both noises widened by the factor that puts the unknown
-         * acceleration's sd, accel_unknown_sd T, into the speed noise's */
-        const double r = f->cfg.accel_unknown_sd * in->dt_s / f->noise_mom[3];
-        st.scale = sqrt(st.scale * st.scale + r * r);
-    }
-    st.scale = (double)(real)st.scale;
+    st.scale = (double)(real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
     st.has_y = has_y;
     st.free_run = free_run;
+    /* the unknown acceleration as a zero-mean Gaussian on the speed, a
+     * random walk like the noises (variance in proportion to T): sd
+     * accel_unknown_sd dt_nominal over a nominal step; the configured
+     * noises keep their shape and mean */
+    st.acc_var = free_run ? f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * in->dt_s * f->cfg.dt_nominal_s : 0.0;
     e->predict_update(f, &st);
     if (f->rf.active) {
         hstpf__refine_update(f, &st);

@@ -12,9 +12,10 @@ typedef struct {
     double dt;        /* step length, s */
     double xu;        /* xi * traction, m/s^2 */
     double yr;        /* measured position relative to the origin, m */
-    double scale;     /* noise scale sqrt(dt / dt_nominal), widened when free_run */
+    double scale;     /* noise scale sqrt(dt / dt_nominal) */
     int has_y;        /* a measurement this step */
     int free_run;     /* the traction is unknown: xu balances the models' resistance (bank.c) */
+    double acc_var;   /* and the speed's variance this step from the unknown acceleration, (m/s)^2 (0 if known) */
 } hstpf__step_t;
 
 /* An acquisition: the fixes a model's state is placed from. With t12 > 0,

@@ -443,6 +443,9 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
     if (hstpf__refine_yardstick(f) || screened(f)) {
         rows_kalman_step(f, st);
     }
+    /* the traction unknown: the speeds spread by its Gaussian, as theta's
+     * uncertainty spreads the hypothesis' (grid_noise.c) */
+    f->grid.theta_sd = (real)sqrt(st->acc_var);
     for (l = 0; l < f->cfg.n_models; ++l) {
         if (f->grid.slot[l] >= 0) {
             const uint32_t hits = f->m[l].floor_hits;
@@ -452,14 +455,16 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
     }
     if (hstpf__refine_on_grid(f)) {
         const uint32_t hits = f->m[l].floor_hits;
+        double tsd;
         hstpf__refine_grid_theta(f);
-        f->grid.theta_sd = (real)hstpf__refine_theta_sd(f, st);
+        tsd = hstpf__refine_theta_sd(f, st);
+        f->grid.theta_sd = (real)(st->acc_var > 0.0 ? sqrt(tsd * tsd + st->acc_var) : tsd);
         model_step(f, &f->m[l], st);
-        f->grid.theta_sd = 0;
         if (f->m[l].floor_hits == hits) {
             missed = 0; /* it fits a fix every row misses: the rows are off */
         }
     }
+    f->grid.theta_sd = 0;
     if (hstpf__refine_yardstick(f) || screened(f)) {
         anchor_lost(f);
     }

@@ -113,7 +113,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         /* P = F P F' + Q with F = [1 dt; 0 fvv] */
         qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
         qsv = fvv * (psv + dt * pvv);
-        qvv = fvv * fvv * pvv + sc2 * nm[3] * nm[3];
+        qvv = fvv * fvv * pvv + sc2 * nm[3] * nm[3] + st->acc_var;
     }
     if (st->has_y && hstpf__fix_exact(f)) {
         hstpf__fix_t fx;

@@ -174,12 +174,17 @@ void hstpf__replicate(real *s, real *v, real *lw, const uint16_t *cnt, uint16_t 
 }
 
 /* This step's process noise into nz_s / nz_v, scaled to the step. */
-static void draw_noise(hstpf_t *f, hstpf_rng_t *rng, real scale)
+static void draw_noise(hstpf_t *f, hstpf_rng_t *rng, real scale, real acc_sd)
 {
     uint16_t i;
     for (i = 0; i < f->cfg.n_particles; ++i) {
         f->nz_s[i] = scale * hstpf__dist_sample(&f->ds, hstpf__rng_next(rng));
         f->nz_v[i] = scale * hstpf__dist_sample(&f->dv, hstpf__rng_next(rng));
+    }
+    if (acc_sd > (real)0) { /* the traction unknown: a zero-mean Gaussian acceleration too */
+        for (i = 0; i < f->cfg.n_particles; ++i) {
+            f->nz_v[i] += acc_sd * hstpf__dist_sample(&f->unit, hstpf__rng_next(rng));
+        }
     }
 }
 
@@ -366,15 +371,15 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 {
     const int paired = paired_bank(f);
     const real dt = (real)st->dt, xu = (real)st->xu, yr = (real)st->yr, scale = (real)st->scale;
-    const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles;
+    const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles, acc_sd = (real)sqrt(st->acc_var);
     uint16_t l;
     if (paired) {
-        draw_noise(f, &f->rng, scale);
+        draw_noise(f, &f->rng, scale, acc_sd);
     }
     for (l = 0; l < f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         if (!paired) {
-            draw_noise(f, &m->rng, scale);
+            draw_noise(f, &m->rng, scale, acc_sd);
         }
         model_update(f, m, dt, xu, st->has_y, yr, f->scratch);
         if (!paired && st->has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < thr)) {

@@ -165,7 +165,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         }
         z[0] += dt * v + st->scale * nm[0];
         z[1] = vd + st->scale * nm[2];
-        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3]);
+        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3] + st->acc_var);
     } else {
         f1[0] = 0.0;
         f1[1] = 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
@@ -301,7 +301,7 @@ double hstpf__refine_theta_sd(const hstpf_t *f, const hstpf__step_t *st)
     g[0] = -f->xi;
     g[1] = -f->xi * vk;
     g[2] = -f->xi * vk * vk;
-    g[3] = st->xu;
+    g[3] = st->free_run ? 0.0 : st->xu; /* no reported traction for k to scale */
     for (i = 0; i < 4; ++i) {
         for (j = 0; j < 4; ++j) {
             var += g[i] * g[j] * p[(2 + i) * NZ + 2 + j];

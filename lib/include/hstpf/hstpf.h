@@ -249,9 +249,11 @@ typedef struct {
      *  (0, HSTPF_DT_MAX_S] (30). */
     double max_gap_s;
     /** While the traction is unknown (hstpf_input_t.traction_unknown) the
-     *  train's acceleration is taken as 0 with this sd, m/s^2, over each
-     *  step: the process noise is widened to cover it; (0, 10] (0.5:
-     *  about a high-speed train's service traction and braking). */
+     *  train's acceleration is taken as 0 with this sd, m/s^2: a zero-mean
+     *  Gaussian added to the speed, of variance accel_unknown_sd^2 T
+     *  dt_nominal_s over a step of T (a random walk, as the noises scale);
+     *  (0, 10] (0.5: about a high-speed train's service traction and
+     *  braking). */
     double accel_unknown_sd;
     /** Measurements farther than this from the predicted position are
      *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000). */
@@ -367,11 +369,12 @@ typedef struct {
                               fix once: one fed twice counts as two independent ones. */
     uint8_t has_position; /**< 0: no measurement this step, predict only */
     /** 1: the traction over the step is not known (its sender is silent or
-     *  reports it invalid); traction is then ignored, and the step takes
+     *  reports it invalid); traction is then not read, and the step takes
      *  the train's acceleration as 0 with cfg.accel_unknown_sd: no model
      *  holds the train at rest, the model weights and the declaration's
      *  hold wait (a made-up traction is no evidence about W(v)), and the
-     *  continuous hypothesis learns nothing. 0 (the default): known. */
+     *  continuous hypothesis steps without its theta (theta moves only by
+     *  what the fix says of s and v). 0 (the default): known. */
     uint8_t traction_unknown;
 } hstpf_input_t;
 
