@@ -3,4 +3,4 @@
 See docs/tools.md for the command-line tools and docs/can.md for the frames.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

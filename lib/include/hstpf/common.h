@@ -20,7 +20,7 @@ extern "C" {
 
 /** Library version, semantic: major.minor.patch. */
 #define HSTPF_VERSION_MAJOR 0
-#define HSTPF_VERSION_MINOR 1
+#define HSTPF_VERSION_MINOR 2
 #define HSTPF_VERSION_PATCH 0
 
 /*
