@@ -745,7 +745,7 @@ int32_t hstpf_reacquire(hstpf_t *f);
  * continuous hypothesis' grid if it has one (docs/grid.md measures it).
  * The worst step costs a few times the median (a fix far off with a
  * heavy-tailed noise table, a step near max_gap_s; docs/footprint.md).
- * Stack: 1 160 B painted on a Cortex-M4F with libm, the largest engine
+ * Stack: 1 200 B painted on a Cortex-M4F with libm, the largest engine
  * (budgeted at 1 240 B in the cross test; up to about 1.3 KiB on x86-64);
  * no other memory.
  */
