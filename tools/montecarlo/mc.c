@@ -938,61 +938,61 @@ static const timetable_t start300_tt = {start300_legs, 3, -1.0, 300.0};
 #define CLOCK_AT_S 1250.0 /* on the line: leg 3 cruising at 300 km/h */
 
 static const scenario_t scenarios[] = {
-    {"paper1", 1, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"paper2", 2, HSTPF_PROFILE_PAPER, 0.0, 0, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"all17", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"all17-coast", 1, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"all17-coast-loss", 1, HSTPF_PROFILE_COAST_BRAKE, 0.05, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "paper1", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 0, .duration_s = 1800.0},
+    {.name = "paper2", .paper_case = 2, .profile = HSTPF_PROFILE_PAPER, .all17 = 0, .duration_s = 1800.0},
+    {.name = "all17", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0},
+    {.name = "all17-coast", .paper_case = 1, .profile = HSTPF_PROFILE_COAST_BRAKE, .all17 = 1, .duration_s = 1800.0},
+    {.name = "all17-coast-loss", .paper_case = 1, .profile = HSTPF_PROFILE_COAST_BRAKE, .loss_rate = 0.05, .all17 = 1, .duration_s = 1800.0},
     /* all 17 types with the paper's Case 2 (Gamma) noise (issue 13) */
-    {"all17-case2", 2, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"all17-coast-case2", 2, HSTPF_PROFILE_COAST_BRAKE, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "all17-case2", .paper_case = 2, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0},
+    {.name = "all17-coast-case2", .paper_case = 2, .profile = HSTPF_PROFILE_COAST_BRAKE, .all17 = 1, .duration_s = 1800.0},
     /* heavy-tailed position noise with Case 1's process noise (issue 13) */
-    {"heavy-t", 3, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"heavy-mix", 4, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 0, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"hilly-ignored", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 0, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"hilly-known", 1, HSTPF_PROFILE_PAPER, 0.0, 1, 1800.0, 1, 1, NULL, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "heavy-t", .paper_case = 3, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0},
+    {.name = "heavy-mix", .paper_case = 4, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0},
+    {.name = "hilly-ignored", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .hilly = 1},
+    {.name = "hilly-known", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .hilly = 1, .filter_knows_track = 1},
     /* journeys: 17 types, Case 1 noise, the holding brake reported at rest */
-    {"stops", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"day", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 14400.0, 0, 0, &day_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"start300", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"clock+30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"clock-30", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"outage", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"gain5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.05, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "stops", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
+    {.name = "day", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 14400.0, .tt = &day_tt},
+    {.name = "start300", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt},
+    {.name = "clock+30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 30.0, .clock_at_s = CLOCK_AT_S},
+    {.name = "clock-30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = -30.0, .clock_at_s = CLOCK_AT_S},
+    {.name = "outage", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .outage = 1},
+    {.name = "gain5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = 0.05},
     /* trains not on Table 1: the line, each coefficient 10 / 15 / 20 % off its row; an
      * unmodelled 8 per-mille climb; all three by one mass-like factor 10 / 20 %; the
      * truth's row left out of the bank; a traction gain 5 % low */
-    {"off10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 0, 0, 0.0, 0.0},
-    {"off15", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0, 0.0},
-    {"off20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 0, 0, 0.0, 0.0},
-    {"grade8", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0, 0.0},
-    {"mass10", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.10, 0.0, 1, 0, 0.0, 0.0},
-    {"mass20", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0, 0.0, 0.0},
-    {"absent", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1, 0.0, 0.0},
+    {.name = "off10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.10},
+    {.name = "off15", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.15},
+    {.name = "off20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.20},
+    {.name = "grade8", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .grade_permille = 8.0},
+    {.name = "mass10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.10, .common = 1},
+    {.name = "mass20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.20, .common = 1},
+    {.name = "absent", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .absent = 1},
     /* the positioning unit starts a new run (0 where the train stands) at a stop on the line */
-    {"restart", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 1000.0, 0.0},
+    {.name = "restart", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .restart_after_s = 1000.0},
     /* the traction unit silent for 20-60 s from 16 s before the departure from the second station */
-    {"tracgap", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 1010.0},
-    {"gain-5", 1, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, -0.05, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "tracgap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
+    {.name = "gain-5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.05},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
-    {"stops-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"restart-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 1000.0, 0.0},
-    {"tracgap-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 1010.0},
-    {"off15-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0, 0.0},
-    {"grade8-t", 3, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0, 0.0},
+    {.name = "stops-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
+    {.name = "restart-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .restart_after_s = 1000.0},
+    {.name = "tracgap-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
+    {.name = "off15-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.15},
+    {.name = "grade8-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .grade_permille = 8.0},
     /* the line with Case 2's Gamma noise, 17 types: issue 13's daemon journey;
      * then the start at speed, the clock steps and the outage under it */
-    {"stops-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"start300-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 1800.0, 0, 0, &start300_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"clock+30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"clock-30-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, -30.0, CLOCK_AT_S, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
-    {"outage-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 1, 0.0, 0.0, 0.0, 0, 0, 0.0, 0.0},
+    {.name = "stops-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
+    {.name = "start300-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt},
+    {.name = "clock+30-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 30.0, .clock_at_s = CLOCK_AT_S},
+    {.name = "clock-30-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = -30.0, .clock_at_s = CLOCK_AT_S},
+    {.name = "outage-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .outage = 1},
     /* trains not on Table 1 under Case 2 noise (the hypothesis needs --refine-any-noise) */
-    {"off15-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.15, 0.0, 0, 0, 0.0, 0.0},
-    {"grade8-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 8.0, 0, 0, 0.0, 0.0},
-    {"mass20-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.20, 0.0, 1, 0, 0.0, 0.0},
-    {"absent-case2", 2, HSTPF_PROFILE_JOURNEY, 0.0, 1, 2460.0, 0, 0, &line_tt, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 1, 0.0, 0.0},
+    {.name = "off15-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.15},
+    {.name = "grade8-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .grade_permille = 8.0},
+    {.name = "mass20-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.20, .common = 1},
+    {.name = "absent-case2", .paper_case = 2, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .absent = 1},
 };
 
 /* Journey table: one row per truth and a total (docs/results.md). */
