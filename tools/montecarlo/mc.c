@@ -50,6 +50,8 @@ typedef struct {
     int absent;                 /* the truth's row is not in the filter's bank */
     /* a reference that restarts (zero for the others) */
     double restart_after_s;     /* at the first stop held after this, the fixes restart at 0 */
+    double swap_after_s;        /* at the first stop held after this, the truth becomes row truth + swap_rows */
+    int swap_rows;
     double trac_gap_at_s;       /* no traction from here for 20-60 s (0 = none) */
 } scenario_t;
 
@@ -88,6 +90,11 @@ typedef struct {
     long gap_still;             /* steps in that window published at standstill while the train moved */
     double gap_ev_max;          /* max |speed error| at a valid step in that window, m/s */
     double gap_tv;              /* total variation of the weights across the gap */
+    double swap_t;              /* when the truth changed type (-1: it did not) */
+    int swap_decl;              /* the type declared then (-1: none) */
+    double swap_old_s;          /* how long after the change the old type stayed declared (-1: it was not) */
+    double swap_new_s;          /* when after it the new truth was first declared (-1: never) */
+    double swap_w_max;          /* max |W(v) error| at 300 km/h while a wrong type was declared and valid */
 } journey_t;
 
 /* Filter settings under study: the same for every scenario and truth. */
@@ -391,6 +398,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     double ref_off = 0.0;          /* the reference's restart: added to the truth and its fixes */
     double u_known = 0.0, q_gap[MAXM]; /* the traction gap: the last traction before it, the weights */
+    int decl_prev = -1, new_truth = -1; /* the type change: the declared row before the step, the new truth */
     hstpf_theta_t bank[MAXM];
     /* --oracle */
     hstpf_t *fo = NULL;
@@ -416,6 +424,8 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     jr->v_min_rest = HUGE_VAL;
     jr->pe10 = -1.0;
     jr->restart_t = jr->revalid_s = -1.0;
+    jr->swap_t = jr->swap_old_s = jr->swap_new_s = -1.0;
+    jr->swap_decl = -1;
     hstpf_sim_default(&sc);
     sc.truth = w->models[truth];
     sc.profile = w->sc->profile;
@@ -580,6 +590,13 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 }
             }
         }
+        if (w->sc->swap_after_s > 0.0 && jr->swap_t < 0.0 && smp.t >= w->sc->swap_after_s && smp.held) {
+            /* a consist coupled or split at a station: another row's resistance from here */
+            jr->swap_t = smp.t;
+            jr->swap_decl = decl_prev;
+            new_truth = (truth + w->sc->swap_rows) % w->n_models;
+            sim.cfg.truth = w->models[new_truth];
+        }
         smp.s += ref_off; /* the truth and its fixes on the reference the unit sends */
         smp.y += ref_off;
         in.position_m += ref_off;
@@ -655,8 +672,24 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 jr->gap_tv = tv_dist(q_gap, &est, w->n_models); /* after the gap's last step */
             }
         }
+        if (jr->swap_t >= 0.0) {
+            const int d = table_index(w, truth, est.declared);
+            if (d == truth && d != new_truth) {
+                jr->swap_old_s = smp.t - jr->swap_t;
+            }
+            if (d == new_truth && jr->swap_new_s < 0.0) {
+                jr->swap_new_s = smp.t - jr->swap_t;
+            }
+            if (d >= 0 && d != new_truth && est.valid) {
+                const hstpf_theta_t th = {NULL, (double)est.theta[0], (double)est.theta[1], (double)est.theta[2]};
+                const double w300 = hstpf_resistance(&sim.cfg.truth, 300.0 / 3.6);
+                const double we = fabs(hstpf_resistance(&th, 300.0 / 3.6) - w300) / w300;
+                jr->swap_w_max = we > jr->swap_w_max ? we : jr->swap_w_max;
+            }
+        }
         jr->assert_fail += !decl_consistent(&est, cfg.models, cfg.n_models);
         decl = table_index(w, truth, est.declared);
+        decl_prev = decl;
         if (fo && no > 9 && decl >= 0 && decl == oi[1] && decl != truth) { /* a wrong type: not the truth's own row */
             r->or_near_decl = 1;
             r->or_nb_decl |= nb_pass;
@@ -971,6 +1004,10 @@ static const scenario_t scenarios[] = {
     {.name = "absent", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .absent = 1},
     /* the positioning unit starts a new run (0 where the train stands) at a stop on the line */
     {.name = "restart", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .restart_after_s = 1000.0},
+    /* a consist coupled or split at the second station: the truth becomes the row 8 further on (far: e.g.
+     * CRH3 -> DF11) or the next row (often near), from the first held step after 1000 s */
+    {.name = "swap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .swap_after_s = 1000.0, .swap_rows = 8},
+    {.name = "swap-near", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .swap_after_s = 1000.0, .swap_rows = 1},
     /* the traction unit silent for 20-60 s from 16 s before the departure from the second station */
     {.name = "tracgap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
     {.name = "gain-5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.05},
@@ -1145,6 +1182,11 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                     fprintf(jf, ",\"gap_s\":%.0f,\"gap_bad\":%ld,\"gap_still\":%ld,\"gap_ev_max\":%.4g,\"gap_tv\":%.4g",
                             q->gap_s, q->gap_bad, q->gap_still, q->gap_ev_max, q->gap_tv);
                 }
+                if (w->sc->swap_after_s > 0.0) {
+                    fprintf(jf, ",\"swap_t\":%.0f,\"swap_declared\":\"%s\",\"swap_old_s\":%.0f,\"swap_new_s\":%.0f,\"swap_w_max\":%.4g",
+                            q->swap_t, q->swap_decl >= 0 ? models[q->swap_decl].name : "", q->swap_old_s, q->swap_new_s,
+                            q->swap_w_max);
+                }
                 fputc('}', jf);
             }
             fprintf(jf, "]}");
@@ -1185,6 +1227,29 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                w->sc->trac_gap_at_s, w->st->gap_hold ? "the last traction fed" : "traction unknown", bad, nbad, all,
                evmax, still, pct(tvg, all, 0.5), pct(tvg, all, 1.0));
         free(tvg);
+    }
+    if (w->sc->swap_after_s > 0.0) { /* the truth changed type at a stop */
+        double *old = malloc(sizeof(double) * (size_t)all);
+        int nold = 0, ndecl = 0, nnew = 0;
+        double wmax = 0.0;
+        if (old == NULL) {
+            fprintf(stderr, "out of memory\n");
+            exit(1);
+        }
+        for (j = 0; j < all; ++j) {
+            const journey_t *q = &w->runs[j].j;
+            ndecl += q->swap_decl >= 0;
+            nnew += q->swap_new_s >= 0.0;
+            if (q->swap_old_s >= 0.0) {
+                old[nold++] = q->swap_old_s;
+            }
+            wmax = q->swap_w_max > wmax ? q->swap_w_max : wmax;
+        }
+        printf("type changed at a stop (row + %d): a type declared then in %d of %d runs; the old type kept after the "
+               "change in %d, for a median %.0f s, max %.0f s; the new truth declared in %d; W(300 km/h) error while a "
+               "wrong type was declared and valid, max %.1f%%\n",
+               w->sc->swap_rows, ndecl, all, nold, pct(old, nold, 0.5), pct(old, nold, 1.0), nnew, 100.0 * wmax);
+        free(old);
     }
     if (w->sc->restart_after_s > 0.0) { /* the reference restarted at a stop: how soon valid again */
         double *rv = malloc(sizeof(double) * (size_t)all);
