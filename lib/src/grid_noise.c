@@ -109,8 +109,12 @@ static void speed_conv(real *p, const real *w, const real *k, int nk, int m0, in
 }
 
 /* The hypothesis' grid: its speeds spread by N(0, theta_sd^2) too (theta's
- * uncertainty, refine.c), through work; what would go below or above the
- * box is dropped (it scores as mass the prediction lost). */
+ * uncertainty, refine.c), and every grid's while the traction is unknown
+ * (its acceleration's sd, bank.c), through work; what would go below or
+ * above the box is dropped (it scores as mass the prediction lost): near
+ * rest that is a speed cut at 0 and renormalised, not piled at 0, which
+ * publishes 0.1-0.2 m/s more at a stop in a traction gap (a review's
+ * measure; well within its sd). */
 static void theta_spread(hstpf_t *f, real *p, const real *ng)
 {
     int m0;

@@ -141,7 +141,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         g = (double)hstpf__track_acc(f, &r->track_hint, (hstpf_real_t)z[0]);
     }
     /* st->xu = xi u: the gain k scales the reported traction. With the
-     * traction unknown the acceleration is 0 with the widened noise, not a
+     * traction unknown the acceleration is 0 with st->acc_var on the speed, not a
      * function of theta: the step tells theta nothing but through what
      * the fix says of (s, v) */
     a = st->free_run ? 0.0 : k * st->xu - xi * (c0 + c1 * vk + c2 * vk * vk) - g;
