@@ -48,6 +48,7 @@ typedef struct {
     uint16_t grid_rows; /* hstpf_config_t.grid_rows */
     double declare_threshold, declare_hold_s;
     double gate_m;
+    double accel_unknown_sd; /* hstpf_config_t's: the acceleration's sd while the traction is stale */
     /* train and inputs */
     double mass_t;
     hstpfd_sched_config_t sched; /* mass_t and first_dt_s filled at the end */

@@ -39,6 +39,8 @@ const hstpfd__key_t hstpfd__keys[] = {
      "model weight above which a type may be declared"},
     {"declare_hold_s", K_DBL, OFF(declare_hold_s), 0, 1e6, 0, "how long it must stay above, s"},
     {"gate_m", K_DBL, OFF(gate_m), 0, HSTPF_POS_MAX_M, 0, "outlier gate on the position, m (0 = none)"},
+    {"accel_unknown_sd", K_DBL, OFF(accel_unknown_sd), 0, 10, HSTPFD_LO_OPEN,
+     "while the traction is stale: the train's acceleration taken as 0 with this sd, m/s^2"},
     {"mass_t", K_DBL, OFF(mass_t), 0, 1e5, HSTPFD_LO_OPEN, "train mass, t (traction kN -> N/kN)"},
     {"step_period_s", K_DBL, OFF(sched.step_period_s), 0, HSTPF_DT_MAX_S, 0,
      "0: a step per valid position frame; else step at most this often (decimate)"},
