@@ -235,3 +235,15 @@ def test_tracgaps_row(tmp_path):
     cells = [c.strip() for c in table[2].strip("|").split("|")]
     assert cells == ["`tracgap-hold`", "the last traction fed (before)", "2851 (154 of 170)", "7.75", "1946",
                      "0.0050 / 0.7688"]
+
+
+def test_swaps_row(tmp_path):
+    # hstpf-mc's own wording (the swap scenario's line)
+    (tmp_path / "swap.txt").write_text(
+        "type changed at a stop (row + 8): a type declared then in 123 of 1700 runs; the old type kept after the "
+        "change in 128, for a median 219 s, max 1460 s; the new truth declared in 181; W(300 km/h) error while a "
+        "wrong type was declared and valid, max 79.1%\n")
+    table = rt.swaps(tmp_path).splitlines()
+    assert len(table) == 3
+    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    assert cells == ["`swap`", "123 of 1700", "128, 219 / 1460 s", "181", "79.1%"]

@@ -107,6 +107,26 @@ def tracgaps(d: Path) -> str:
     return "\n".join(out)
 
 
+SWAPS = ["swap", "swap-near"]
+
+
+def swaps(d: Path) -> str:
+    """A consist that changes at a station (hstpf-mc's swap scenarios): how
+    long the first truth's type stays declared after the change."""
+    out = ["| scenario | a type declared at the change | the first truth declared after the change: runs, median / "
+           "max time after it | the new truth declared | W(300 km/h) error while a wrong type was declared and "
+           "valid, max |", "|" + "---|" * 5]
+    for s in SWAPS:
+        if not (d / f"{s}.txt").exists():
+            continue
+        g = last(d / f"{s}.txt", "type changed")
+        out.append("| `{}` | {} | {}, {} / {} s | {} | {} |".format(
+            s, num(r"declared then in (\d+ of \d+) runs", g), num(r"kept after the change in (\d+)", g),
+            num(r"for a median (\d+) s", g), num(r"for a median \d+ s, max (\d+) s", g),
+            num(r"the new truth declared in (\d+)", g), num(r"declared and valid, max ([\d.]+%)", g)))
+    return "\n".join(out)
+
+
 def far_split(path: Path) -> str:
     """The runs whose truth is >= 10 % from every row (issue 10's off-table
     runs): how many, 'no type fits' at the end, a type declared; '-' for an
@@ -377,6 +397,8 @@ def main(argv=None) -> int:
         print(restarts(d))
         print("\n### The traction unknown across a departure\n")
         print(tracgaps(d))
+        print("\n### A consist that changes at a station\n")
+        print(swaps(d))
         print("\n### Trains not on Table 1\n")
         print(offtable(d))
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_T):
