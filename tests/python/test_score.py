@@ -378,3 +378,19 @@ def test_custom_declared_row_without_its_theta(tmp_path):
     js = tmp_path / "m.json"
     assert score.main([str(rec), "--truth", str(tmp_path / "c_truth.csv"), "--json", str(js)]) == 0
     assert json.loads(js.read_text())["declared_correct"] is None
+
+
+def test_input_log_clock_step_warned(sim, tmp_path, capsys):
+    """An input log whose clock steps 20 s forward half-way (a receiver's
+    clock step recorded in the log): the frames are dated log time - t0, so
+    the score warns and counts it; a clean log counts none."""
+    d, log, rows = sim
+    msgs = read_log(str(log))
+    for m in msgs:
+        if m.timestamp >= 200.0:
+            m.timestamp += 20.0
+    stepped = tmp_path / "stepped.log"
+    write_log(str(stepped), msgs)
+    codec = FrameCodec()
+    assert len(score.input_clock_steps(read_log(str(stepped)), codec)) == 1
+    assert score.input_clock_steps(read_log(str(log)), codec) == []

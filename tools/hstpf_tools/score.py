@@ -277,6 +277,34 @@ def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog],
     return series, e2e_results
 
 
+def input_clock_steps(msgs, codec: FrameCodec) -> List[float]:
+    """Log times at which the input log's clock steps: consecutive valid
+    position frames whose log times differ from their fix times' difference
+    (Position.FixTime, within half its wrap) by more than a second. Frames
+    are dated log time - t0, so the truth is misread after such a step."""
+    pos_id = codec.message(POSITION).frame_id
+    msg = codec.message(POSITION)
+    out: List[float] = []
+    prev = None
+    for m in msgs:
+        if m.arbitration_id != pos_id or not is_hstpf_frame(m):
+            continue
+        try:
+            sig = msg.decode(bytes(m.data), decode_choices=False)
+        except Exception:  # a frame cantools cannot decode (wrong length): not a position
+            continue
+        if sig.get("PosValid", 0) < 0.5 or sig.get("FixTimeValid", 0) < 0.5:
+            prev = None  # a gap in the fix clock: the next pair starts afresh
+            continue
+        if prev is not None:
+            d = (int(sig["FixTime"]) - prev[1]) % FIX_TIME_WRAP_MS
+            d = d - FIX_TIME_WRAP_MS if d > FIX_TIME_WRAP_MS // 2 else d
+            if abs((m.timestamp - prev[0]) - d / 1000.0) > 1.0:
+                out.append(float(m.timestamp))
+        prev = (m.timestamp, int(sig["FixTime"]))
+    return out
+
+
 def fix_time_stats(rec_msgs, dbc: Optional[str] = None) -> dict:
     """The recorded position frames' fix times (Position.FixTime) against
     their receive stamps: how many carry one, the rate of the receive clock
@@ -642,6 +670,11 @@ def _main(argv) -> int:
         if a.t0 is None and inp and not tt[0] - 1.0 <= inp[0].timestamp <= tt[-1]:
             t0 = inp[0].timestamp  # simulated with --t0 (hstpf-simulate's default is 0): from its start
         inputs = InputLog(inp, codec.message(POSITION).frame_id, t0)
+        steps = input_clock_steps(inp, codec)
+        if steps:
+            print(f"warning: {a.input_log}: its clock steps {len(steps)} time(s) (first at log time "
+                  f"{steps[0]:.6g}): frames are dated log time - t0, so the estimates after a step are scored "
+                  "against the wrong truth time; score the parts between steps separately", file=sys.stderr)
         off = input_offset_m(inp, codec, t0, truth)
         if off is not None and off > INPUT_OFFSET_WARN_M:
             print(f"warning: {a.input_log}: its positions lie {off:.0f} m (median) from the truth's at simulation "
@@ -659,6 +692,7 @@ def _main(argv) -> int:
     res["align"] = align
     if align == "inputs":
         res["input_t0"] = t0
+        res["input_clock_steps"] = len(steps)
     res["output_e2e"] = e2e_res
     res["state_frames_dated"] = series.pop("dated_by_est_time")
     res["ignored_29bit_frames"] = series.pop("ignored_29bit_frames")
