@@ -211,39 +211,40 @@ def test_paired_declaration(tmp_path):
     assert cells == ["6", "5 / 5", "4", "+0, +72.5 +- 76.1", "2 / 1 / 1", "1 / 0"]
 
 
+def one_row(tmp_path, name: str, text: str, table_fn):
+    """The cells of the one data row table_fn makes of hstpf-mc output text
+    written as name.txt (the other scenarios of its table absent)."""
+    (tmp_path / f"{name}.txt").write_text(text)
+    table = table_fn(tmp_path).splitlines()
+    assert len(table) == 3  # header, rule, the one scenario present
+    return [c.strip() for c in table[2].strip("|").split("|")]
+
+
 def test_restarts_row(tmp_path):
     # hstpf-mc's own wording (the restart scenario's two lines)
-    (tmp_path / "restart.txt").write_text(
-        "total: 170 runs; false declarations 2 (1.2%), 0 from a standstill, 0 outside the pair; ...\n"
-        "reference restarted at a stop in 170 of 170 runs; valid again after a median 35 s, p90 36 s, "
-        "max 61 s (never in 0); valid at 97.7% of the steps after it; |position error| at a valid step "
-        "after it max 6.11 m\n")
-    table = rt.restarts(tmp_path).splitlines()
-    assert len(table) == 3  # header, rule, restart (restart-t absent)
-    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    cells = one_row(tmp_path, "restart",
+                    "total: 170 runs; false declarations 2 (1.2%), 0 from a standstill, 0 outside the pair; ...\n"
+                    "reference restarted at a stop in 170 of 170 runs; valid again after a median 35 s, p90 36 s, "
+                    "max 61 s (never in 0); valid at 97.7% of the steps after it; |position error| at a valid step "
+                    "after it max 6.11 m\n", rt.restarts)
     assert cells == ["`restart`", "170 of 170", "35 / 36 / 61", "0", "97.7%", "6.11", "2 (1.2%)"]
 
 
 def test_tracgaps_row(tmp_path):
     # hstpf-mc's own wording (the tracgap scenario's line)
-    (tmp_path / "tracgap-hold.txt").write_text(
-        "traction gap of 20-60 s from 1010 s (the last traction fed): valid steps more than 5 sd off in it and "
-        "30 s after: 2851 in 154 of 170 runs; largest speed error at a valid step 7.75 m/s; standstill published "
-        "while the train moved: 1946 steps; the weights' TV across the gap median 0.0050 max 0.7688\n")
-    table = rt.tracgaps(tmp_path).splitlines()
-    assert len(table) == 3
-    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    cells = one_row(tmp_path, "tracgap-hold",
+                    "traction gap of 20-60 s from 1010 s (the last traction fed): valid steps more than 5 sd off in "
+                    "it and 30 s after: 2851 in 154 of 170 runs; largest speed error at a valid step 7.75 m/s; "
+                    "standstill published while the train moved: 1946 steps; the weights' TV across the gap median "
+                    "0.0050 max 0.7688\n", rt.tracgaps)
     assert cells == ["`tracgap-hold`", "the last traction fed (before)", "2851 (154 of 170)", "7.75", "1946",
                      "0.0050 / 0.7688"]
 
 
 def test_swaps_row(tmp_path):
     # hstpf-mc's own wording (the swap scenario's line)
-    (tmp_path / "swap.txt").write_text(
-        "type changed at a stop (row + 8): a type declared then in 123 of 1700 runs; the old type kept after the "
-        "change in 128, for a median 219 s, max 1460 s; the new truth declared in 181; W(300 km/h) error while a "
-        "wrong type was declared and valid, max 79.1%\n")
-    table = rt.swaps(tmp_path).splitlines()
-    assert len(table) == 3
-    cells = [c.strip() for c in table[2].strip("|").split("|")]
+    cells = one_row(tmp_path, "swap",
+                    "type changed at a stop (row + 8): a type declared then in 123 of 1700 runs; the old type kept "
+                    "after the change in 128, for a median 219 s, max 1460 s; the new truth declared in 181; "
+                    "W(300 km/h) error while a wrong type was declared and valid, max 79.1%\n", rt.swaps)
     assert cells == ["`swap`", "123 of 1700", "128, 219 / 1460 s", "181", "79.1%"]
