@@ -159,23 +159,17 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         z[0] += dt * v + st->scale * nm[0];
         z[1] = 0.0;
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
-    } else if (st->free_run) {
-        for (i = 0; i < NZ; ++i) {
-            f1[i] = i == 1 ? 1.0 : 0.0;
-        }
+    } else {
+        /* the traction unknown: v' = v + noise, theta out of it (acc_var 0 otherwise) */
+        f1[0] = 0.0;
+        f1[1] = st->free_run ? 1.0 : 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
+        f1[2] = st->free_run ? 0.0 : -dt * xi;
+        f1[3] = st->free_run ? 0.0 : -dt * xi * vk;
+        f1[4] = st->free_run ? 0.0 : -dt * xi * vk * vk;
+        f1[5] = st->free_run ? 0.0 : dt * st->xu;
         z[0] += dt * v + st->scale * nm[0];
         z[1] = vd + st->scale * nm[2];
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3] + st->acc_var);
-    } else {
-        f1[0] = 0.0;
-        f1[1] = 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
-        f1[2] = -dt * xi;
-        f1[3] = -dt * xi * vk;
-        f1[4] = -dt * xi * vk * vk;
-        f1[5] = dt * st->xu;
-        z[0] += dt * v + st->scale * nm[0];
-        z[1] = vd + st->scale * nm[2];
-        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3]);
     }
     r->loglik = 0.0;
     if (st->has_y && hstpf__fix_exact(f)) {

@@ -54,6 +54,15 @@ static void read_file(const char *path, char *buf, size_t size)
     fclose(fp);
 }
 
+/* A small text file for a run (a config). */
+static void write_text(const char *path, const char *text)
+{
+    FILE *fp = fopen(path, "w");
+    assert_non_null(fp);
+    assert_true(fputs(text, fp) >= 0);
+    fclose(fp);
+}
+
 /* The value after "key": inside the object that starts at "section": (or
  * anywhere with section NULL). */
 static const char *field(const char *json, const char *section, const char *key)
@@ -466,7 +475,7 @@ static void test_files_and_lines(void **state)
  * offline with --log; a name not in UTF-8 went raw into the JSON. */
 static void test_operator_files(void **state)
 {
-    FILE *in, *out, *cfgf;
+    FILE *in, *out;
     int ch, k = 0;
     const char *p;
     (void)state;
@@ -493,10 +502,7 @@ static void test_operator_files(void **state)
     assert_int_equal((int)num("faults", "bad_lines"), 2);
     assert_int_equal((int)num("frames", "total"), 11999);
     assert_int_equal(run("--log " DIR "/clean.log " MODELS " --out /dev/null --frames-out /dev/null > /dev/null"), 0);
-    cfgf = fopen(DIR "/live.ini", "w");
-    assert_non_null(cfgf);
-    fputs("\xEF\xBB\xBF# saved with a byte-order mark\n[input]\niface = vcan0\n", cfgf);
-    fclose(cfgf);
+    write_text(DIR "/live.ini", "\xEF\xBB\xBF# saved with a byte-order mark\n[input]\niface = vcan0\n");
     assert_int_equal(run("-c " DIR "/live.ini --log " DIR "/clean.log " MODELS " > /dev/null"), 0);
     assert_int_equal(run("--iface vcan0 --log " DIR "/clean.log " MODELS " > /dev/null 2>&1"), 2);
     assert_int_equal(run("--log " DIR "/clean.log --models 'Z\xFCrich:1:0.01:0.0001, CRH3' --mass-t 500 --summary " DIR
@@ -1247,7 +1253,6 @@ static void test_signal(void **state)
 
 static void test_bad_configuration(void **state)
 {
-    FILE *fp;
     (void)state;
     assert_int_equal(run("--log " DIR "/clean.log --particles 1 2>/dev/null"), 2);
     assert_int_equal(run("--particles 100 2>/dev/null"), 2); /* no source */
@@ -1256,10 +1261,7 @@ static void test_bad_configuration(void **state)
     assert_int_equal(run("--log " DIR "/clean.log --models CRH9 2>/dev/null"), 2);
     assert_int_equal(run("--log " DIR "/clean.log --noise-e gaussian:0:-1 2>/dev/null"), 2);
     assert_int_equal(run("--config " DIR "/missing.ini --log " DIR "/clean.log 2>/dev/null"), 2);
-    fp = fopen(DIR "/bad.ini", "w");
-    assert_non_null(fp);
-    fputs("particles = 100\nmass_t = heavy\n", fp);
-    fclose(fp);
+    write_text(DIR "/bad.ini", "particles = 100\nmass_t = heavy\n");
     assert_int_equal(run("--config " DIR "/bad.ini --log " DIR "/clean.log 2> " DIR "/bad.err"), 2);
     read_file(DIR "/bad.err", summary, sizeof summary);
     assert_non_null(strstr(summary, "bad.ini:2: mass_t"));
