@@ -90,6 +90,8 @@ typedef struct {
     long gap_still;             /* steps in that window published at standstill while the train moved */
     double gap_ev_max;          /* max |speed error| at a valid step in that window, m/s */
     double gap_tv;              /* total variation of the weights across the gap */
+    long still_moving;          /* steps published at standstill while the train moved (whole run) */
+    long v_bad;                 /* valid steps whose speed was more than 5 sd and 0.3 m/s off (whole run) */
     double swap_t;              /* when the truth changed type (-1: it did not) */
     int swap_decl;              /* the type declared then (-1: none) */
     double swap_old_s;          /* how long after the change the old type stayed declared (-1: it was not) */
@@ -710,6 +712,11 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 jr->pe_max_after = fabs(ep);
             }
         }
+        jr->still_moving += est.standstill && smp.v > 0.0;
+        if (est.valid) {
+            const double ev = fabs((double)est.speed_mps - smp.v);
+            jr->v_bad += ev > 5.0 * (double)est.speed_sd_mps && ev > 0.3;
+        }
         if (smp.v == 0.0) {
             /* the truth stands: from the step it came to rest to the last
              * step before it departs, every step covers held physics */
@@ -1043,6 +1050,8 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     int n_tv_all = 0, n_pe_all = 0, n_td_all = 0, n_np = 0, n_td_np = 0, j, i, k;
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
     long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
+    long t_still = 0, t_vbad = 0;
+    int n_still = 0, n_vbad = 0;
     double o_pe = 0.0;
     double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
     if (tv_all == NULL || pe_all == NULL || td_all == NULL) {
@@ -1100,6 +1109,10 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             o_cv += q->out_cover_v;
             o_n += q->n_out;
             o_pe = q->out_pe_max > o_pe ? q->out_pe_max : o_pe;
+            t_still += q->still_moving;
+            n_still += q->still_moving > 0;
+            t_vbad += q->v_bad;
+            n_vbad += q->v_bad > 0;
         }
         {
             const double tvmax = pct(tv, ntv, 1.0), pe10max = pct(pe, npe, 1.0);
@@ -1166,12 +1179,13 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                 fprintf(jf,
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
-                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g",
+                        "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g,"
+                        "\"still_moving\":%ld,\"v_bad\":%ld",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
-                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms);
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad);
                 if (w->sc->restart_after_s > 0.0) {
                     fprintf(jf, ",\"restart_t\":%.0f,\"revalid_s\":%.0f,\"restart_valid\":%.4f,\"restart_pe_max\":%.4g",
                             q->restart_t, q->revalid_s,
@@ -1204,6 +1218,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
+    printf("standstill published while the train moved: %ld steps in %d runs; valid steps with the speed more than "
+           "5 sd and 0.3 m/s off: %ld in %d runs\n",
+           t_still, n_still, t_vbad, n_vbad);
     if (w->sc->trac_gap_at_s > 0.0) { /* the traction unit silent across a departure */
         double *tvg = malloc(sizeof(double) * (size_t)all);
         long bad = 0, still = 0;
