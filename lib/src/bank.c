@@ -281,27 +281,29 @@ static int finite_models(const hstpf_t *f)
 /* Standstill: every model that carries weight is held at rest. The data
  * then say nothing about W(v) (docs/model.md), so no model weight moves.
  * Arrival: some weighted models hold the train at rest while others still
- * move it, a few tenths of a m/s apart. A fix then scores "has it stopped
- * yet", which the fix noise decides, not W(v): the weights wait until the
- * models agree, for at most HSTPF__ARRIVAL_MAX_S (a train that really
- * moves then releases them). Returns 2 at standstill, 1 arriving, else 0. */
+ * move it, a few tenths of a m/s apart, or some may have come to rest
+ * (HSTPF__HELD_STOPPING). A fix then scores "has it stopped yet", which
+ * the fix noise decides, not W(v): the weights wait until the models
+ * agree, for at most HSTPF__ARRIVAL_MAX_S (a train that really moves then
+ * releases them). Returns 2 at standstill, 1 arriving, else 0. */
 static int weights_hold(hstpf_t *f, double dt)
 {
     double wb[HSTPF_MAX_MODELS + 1];
-    uint16_t l, held = 0, moving = 0;
+    uint16_t l, held = 0, moving = 0, stopping = 0;
     hstpf__blend_weights(f, wb);
     for (l = 0; l <= f->cfg.n_models; ++l) {
         const uint8_t h = l < f->cfg.n_models ? f->m[l].held : f->rf.held;
         if (wb[l] > 0.0) {
-            held = (uint16_t)(held + (h != 0));
-            moving = (uint16_t)(moving + (h == 0));
+            held = (uint16_t)(held + (h == HSTPF__HELD_YES));
+            moving = (uint16_t)(moving + (h == HSTPF__HELD_NO));
+            stopping = (uint16_t)(stopping + (h == HSTPF__HELD_STOPPING));
         }
     }
-    if (moving == 0u) {
+    if (moving == 0u && stopping == 0u) {
         f->arrival_s = 0.0;
         return 2;
     }
-    if (held == 0u) {
+    if (held == 0u && stopping == 0u) {
         f->arrival_s = 0.0;
         return 0;
     }

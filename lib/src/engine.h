@@ -39,7 +39,9 @@ typedef struct {
  *   held: s' = s, v' = 0, no process noise;
  * - m->held = 1 when the model's whole posterior ends the step at rest
  *   (held, or come to rest within it): then neither s' = s + T v nor
- *   v' = 0 involves W, and the step carries no evidence about it.
+ *   v' = 0 involves W, and the step carries no evidence about it; 2
+ *   (HSTPF__HELD_STOPPING) when it may have come to rest: a fix then
+ *   scores "has it stopped yet" (the bank's arrival rule, bank.c).
  */
 typedef struct {
     /* Every model placed from the acquisition fixes. */
@@ -73,6 +75,35 @@ void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
  * measurement), *held as hstpf_model_t.held, *floored 1 when the
  * measurement was beyond the floor. */
 double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st, uint8_t *held, int *floored);
+
+/* The speed of a Gaussian filter where the train may come to rest within
+ * the step (kalman_rest.c): y = v + T a ~ N(vd, pyy) before the process
+ * noise w_v (mean mu_w, variance q_w), v' = y + w_v if y >= 0, else 0
+ * exactly (docs/model.md, rule 1). */
+#define HSTPF__REST_EPS 1e-3 /* at rest once P(y < 0) >= 1 - this */
+/* hstpf_model_t.held: the model's posterior at the end of the step */
+#define HSTPF__HELD_NO 0u       /* moving */
+#define HSTPF__HELD_YES 1u      /* wholly at rest */
+#define HSTPF__HELD_STOPPING 2u /* at rest with probability HSTPF__REST_EPS or more, not wholly */
+enum { HSTPF__REST_MOVING = 0, HSTPF__REST_MIXED = 1, HSTPF__REST_AT_REST = 2 };
+typedef struct {
+    double p_rest; /* P(v' = 0) */
+    double v, var; /* mean and variance of v' */
+    double kappa;  /* cov(x, v') = kappa cov(x, y) for any x jointly Gaussian with y */
+} hstpf__rest_t;
+/* HSTPF__REST_MOVING: P(y < 0) < 1e-9, the plain Kalman step (out not
+ * set); HSTPF__REST_AT_REST: P(y < 0) >= 1 - HSTPF__REST_EPS (out not set);
+ * HSTPF__REST_MIXED: out holds the moments of v' (point mass and the rest
+ * together). */
+int hstpf__kalman_rest(double vd, double pyy, double mu_w, double q_w, hstpf__rest_t *out);
+/* The same on a filter's mean x and n x n covariance p (row-major, the
+ * speed at index 1) after the step without the speed noise (y's variance
+ * in p[n + 1]): sets the speed's mean, row and column, adds the noise
+ * (q_w + acc_var) to a train that moves; returns hstpf_model_t.held. With
+ * the traction unknown (free_run) no model holds the train: at rest only
+ * if vd < 0. */
+uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double vd, int free_run, double mu_w, double q_w,
+                                 double acc_var);
 
 /* A fix scored by the fix noise's real density against a Gaussian
  * prediction N(s, pss) of the position (kalman_fix.c). */

@@ -89,8 +89,15 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
     const double a = accel(f, m, st->xu, s, v);
     double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v), ns, nv, loglik = 0.0;
     double qss, qsv, qvv;
+    hstpf__rest_t rs;
+    int rest;
     *held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
     *floored = 0;
+    /* with the traction unknown no model holds the train (bank.c): the
+     * deterministic speed never falls */
+    rest = *held ? HSTPF__REST_MOVING
+                 : (st->free_run ? (vd < 0.0 ? HSTPF__REST_AT_REST : HSTPF__REST_MOVING)
+                                 : hstpf__kalman_rest(vd, fvv * fvv * pvv, scale * nm[2], sc2 * nm[3] * nm[3], &rs));
     if (*held) {
         /* at rest and nothing can start it: no motion, no process noise */
         ns = s;
@@ -98,7 +105,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qss = pss;
         qsv = 0.0;
         qvv = 0.0;
-    } else if (vd < 0.0) {
+    } else if (rest == HSTPF__REST_AT_REST) {
         /* comes to rest within the step: v' = 0 exactly; s' = s + dt v and
          * v' do not involve W, so for the weights this is standstill too */
         *held = 1;
@@ -107,6 +114,14 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
         qsv = 0.0;
         qvv = 0.0;
+    } else if (rest == HSTPF__REST_MIXED) {
+        /* may come to rest within the step (kalman_rest.c) */
+        *held = rs.p_rest >= HSTPF__REST_EPS ? HSTPF__HELD_STOPPING : HSTPF__HELD_NO;
+        ns = s + dt * v + scale * nm[0];
+        nv = rs.v;
+        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
+        qsv = rs.kappa * fvv * (psv + dt * pvv);
+        qvv = rs.var;
     } else {
         ns = s + dt * v + scale * nm[0];
         nv = vd + scale * nm[2];

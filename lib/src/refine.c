@@ -84,13 +84,14 @@ void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double
     r->held = 0;
 }
 
-/* P = F P F' + Q with F the identity but for rows 0 and 1. */
+/* P = F P F' + Q with F the identity but for rows 0 and 1, in place: only
+ * rows and columns 0 and 1 change. Each of their entries is the mean of
+ * (F P F')[i][j] and [j][i], which differ by rounding. */
 static void propagate(double *p, const double *f0, const double *f1, double qs, double qv)
 {
-    double fp[2][NZ], out[NZ * NZ];
+    double fp[2][NZ], b00 = 0.0, b01 = 0.0, b10 = 0.0, b11 = 0.0;
     int i, j;
-    memcpy(out, p, sizeof out);
-    for (j = 0; j < NZ; ++j) {
+    for (j = 0; j < NZ; ++j) { /* rows 0, 1 of F P */
         fp[0][j] = 0.0;
         fp[1][j] = 0.0;
         for (i = 0; i < NZ; ++i) {
@@ -98,31 +99,24 @@ static void propagate(double *p, const double *f0, const double *f1, double qs, 
             fp[1][j] += f1[i] * p[i * NZ + j];
         }
     }
-    /* rows 0, 1 of F P; then (F P) F' on columns 0, 1 */
     for (j = 0; j < NZ; ++j) {
-        out[j] = fp[0][j];
-        out[NZ + j] = fp[1][j];
+        b00 += fp[0][j] * f0[j];
+        b01 += fp[0][j] * f1[j];
+        b10 += fp[1][j] * f0[j];
+        b11 += fp[1][j] * f1[j];
     }
-    for (i = 0; i < NZ; ++i) {
-        const double *row = i == 0 ? fp[0] : (i == 1 ? fp[1] : p + i * NZ);
+    for (i = 2; i < NZ; ++i) { /* (P F')[i][0, 1] from row i, read before it is written */
         double a = 0.0, b = 0.0;
-        int k;
-        for (k = 0; k < NZ; ++k) {
-            a += row[k] * f0[k];
-            b += row[k] * f1[k];
+        for (j = 0; j < NZ; ++j) {
+            a += p[i * NZ + j] * f0[j];
+            b += p[i * NZ + j] * f1[j];
         }
-        out[i * NZ] = a;
-        out[i * NZ + 1] = b;
+        p[i * NZ] = p[i] = 0.5 * (a + fp[0][i]);
+        p[i * NZ + 1] = p[NZ + i] = 0.5 * (b + fp[1][i]);
     }
-    for (i = 0; i < NZ; ++i) {
-        for (j = 0; j < i; ++j) {
-            const double m = 0.5 * (out[i * NZ + j] + out[j * NZ + i]);
-            out[i * NZ + j] = out[j * NZ + i] = m;
-        }
-    }
-    out[0] += qs;
-    out[NZ + 1] += qv;
-    memcpy(p, out, sizeof out);
+    p[0] = b00 + qs;
+    p[1] = p[NZ] = 0.5 * (b10 + b01);
+    p[NZ + 1] = b11 + qv;
 }
 
 void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
@@ -147,29 +141,22 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
     a = st->free_run ? 0.0 : k * st->xu - xi * (c0 + c1 * vk + c2 * vk * vk) - g;
     vd = v + dt * a;
     f0[1] = dt;
+    /* the traction unknown: v' = v + noise, theta out of it (acc_var 0 otherwise) */
+    f1[0] = 0.0;
+    f1[1] = st->free_run ? 1.0 : 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
+    f1[2] = st->free_run ? 0.0 : -dt * xi;
+    f1[3] = st->free_run ? 0.0 : -dt * xi * vk;
+    f1[4] = st->free_run ? 0.0 : -dt * xi * vk * vk;
+    f1[5] = st->free_run ? 0.0 : dt * st->xu;
     r->held = (uint8_t)(!st->free_run && v <= 0.0 && p[NZ + 1] <= 0.0 && a <= 0.0);
-    if (r->held) {
-        r->loglik = 0.0;
-    } else if (vd < 0.0) {
-        /* comes to rest within the step: v' = 0 exactly, no speed spread */
-        r->held = 1;
-        for (i = 0; i < NZ; ++i) {
-            f1[i] = 0.0;
-        }
+    if (!r->held) {
+        /* the step without the speed noise: y = v + T a, its variance in
+         * p[NZ + 1]; then the speed (kalman_rest.c: at rest, perhaps, or
+         * moving with its noise) */
         z[0] += dt * v + st->scale * nm[0];
-        z[1] = 0.0;
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
-    } else {
-        /* the traction unknown: v' = v + noise, theta out of it (acc_var 0 otherwise) */
-        f1[0] = 0.0;
-        f1[1] = st->free_run ? 1.0 : 1.0 - dt * xi * 3.6 * (c1 + 2.0 * c2 * vk);
-        f1[2] = st->free_run ? 0.0 : -dt * xi;
-        f1[3] = st->free_run ? 0.0 : -dt * xi * vk;
-        f1[4] = st->free_run ? 0.0 : -dt * xi * vk * vk;
-        f1[5] = st->free_run ? 0.0 : dt * st->xu;
-        z[0] += dt * v + st->scale * nm[0];
-        z[1] = vd + st->scale * nm[2];
-        propagate(p, f0, f1, sc2 * nm[1] * nm[1], sc2 * nm[3] * nm[3] + st->acc_var);
+        r->held = hstpf__kalman_rest_speed(z, p, NZ, vd, st->free_run, st->scale * nm[2], sc2 * nm[3] * nm[3],
+                                           st->acc_var);
     }
     r->loglik = 0.0;
     if (st->has_y && hstpf__fix_exact(f)) {

@@ -431,8 +431,8 @@ typedef struct {
     uint8_t valid;
     /** 1 while the train is held at standstill (docs/model.md): the model
      *  weights are not updated. They also wait, with standstill 0, while
-     *  some weighted models hold the train at rest and others still move
-     *  it (its arrival), for at most 10 s. */
+     *  some weighted models hold the train at rest, or may have brought it
+     *  to rest, and others still move it (its arrival), for at most 10 s. */
     uint8_t standstill;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
@@ -555,7 +555,7 @@ typedef struct {
     double logq;
     hstpf_real_t s_mean, v_mean, ess, loglik;
     hstpf_real_t s_var, v_var;            /* posterior variances */
-    uint8_t held;                         /* the whole posterior held at rest this step */
+    uint8_t held;                         /* 1: the whole posterior at rest this step; 2: perhaps (engine.h) */
     uint8_t k_placed;                     /* grid engine: its Kalman filter placed again this step */
     uint32_t floor_hits, reacquired;
     uint16_t floor_run;                   /* consecutive all-floor steps */
