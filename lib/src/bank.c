@@ -65,6 +65,7 @@ static void reset_state(hstpf_t *f)
     f->rf.loglik = 0.0;
     f->rf.held = 0;
     f->rf.floored = 0;
+    hstpf__trac_check_reset(f);
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
     /* the rows, and the slot of the hypothesis' grid model (unused without one) */
@@ -357,7 +358,7 @@ static double free_xu(const hstpf_t *f, double v)
 
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
 {
-    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh, free_run;
+    int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh, free_run, trac_known;
     double xu;
     const hstpf__engine_t *e;
     hstpf__step_t st;
@@ -421,6 +422,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     has_y = has_y && !gated;
     /* all checks passed: from here on the step cannot fail */
     e = hstpf__engine_of(f);
+    hstpf__trac_check_begin(f, !free_run);
+    trac_known = !free_run;
+    free_run = free_run || f->tc.fault; /* a traction that cannot be right is not used */
     xu = free_run ? free_xu(f, -1.0) : f->xi * in->traction;
     st.dt = in->dt_s;
     st.xu = xu;
@@ -452,6 +456,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
          * the fixes and the estimate disagree (a train moving although
          * held, a time base that broke); a run of these re-acquires */
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
+    }
+    if (trac_known) { /* a lone outlier, or a lock on probation, tests nothing */
+        hstpf__trac_check_end(f, &st, in->traction, f->lost_run != 1u && !f->pr.active);
     }
     /* The first such fix after fixes they fitted is taken for an outlier
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at

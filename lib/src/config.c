@@ -45,6 +45,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->refine_gain_sd = 0.0; /* k fixed at 1: see hstpf.h */
     cfg->grid_speed_lattice = 1; /* docs/grid.md, "The speed lattice" */
     cfg->grid_rows = 3; /* docs/grid.md, "Rows on the grid" */
+    cfg->traction_check = 1; /* docs/model.md, "A traction that cannot be right" */
     return HSTPF_OK;
 }
 
@@ -161,6 +162,9 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     }
     if (c->weight_method != HSTPF_WEIGHT_MARGINAL && c->weight_method != HSTPF_WEIGHT_PAPER) {
         return fail(field, "weight_method", HSTPF_E_CONFIG);
+    }
+    if (c->traction_check > 1u) {
+        return fail(field, "traction_check", HSTPF_E_CONFIG);
     }
     if (c->grid_speed_lattice > 1u) {
         return fail(field, "grid_speed_lattice", HSTPF_E_CONFIG);

@@ -212,6 +212,7 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->arrival_s = 0.0;
     f->lost_run = 0;
     f->pr.active = 0;
+    f->tc.placed = 0; /* placed again at the new lock; a fault stands */
 }
 
 /* Keep float positions small: shift the origin by whole metres (rel: the
@@ -225,6 +226,7 @@ void hstpf__rebase(hstpf_t *f, double rel)
     d = (real)floor(rel);
     hstpf__engine_of(f)->shift(f, d);
     f->rf.kz[0] -= (double)d;
+    hstpf__trac_check_shift(f, (double)d);
     f->origin_m += (double)d;
     hstpf__track_rebase(f);
 }

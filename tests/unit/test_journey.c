@@ -352,6 +352,9 @@ static void test_declaration_states(void **state)
     c.noise_s.sd = c.noise_v.sd = 1e-6;
     c.withdraw_threshold = 0.001;
     c.refine = 0; /* the weights are set by hand on the two rows */
+    /* fixes at exactly 20 m/s with no traction: a train that coasts without
+     * slowing, which the traction check rightly finds no traction explains */
+    c.traction_check = 0;
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     run_s(5, &y);

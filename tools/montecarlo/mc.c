@@ -43,6 +43,7 @@ typedef struct {
     double clock_at_s;
     int outage;                 /* GNSS outage of 20-60 s during an acceleration */
     double gain_bias;           /* traction reported = (1 + gain_bias) x applied */
+    double sign_flip_at_s;      /* > 0: from then on the traction is reported with the wrong sign */
     /* trains not on Table 1 (issue 10; zero for the others) */
     double perturb;             /* each coefficient of the truth x (1 +- perturb), sign per seed */
     double grade_permille;      /* an unmodelled constant gradient */
@@ -92,6 +93,8 @@ typedef struct {
     double gap_tv;              /* total variation of the weights across the gap */
     long still_moving;          /* steps published at standstill while the train moved (whole run) */
     long v_bad;                 /* valid steps whose speed was more than 5 sd and 0.3 m/s off (whole run) */
+    long trac_fault;            /* steps with traction_fault raised */
+    double trac_cusum_max;      /* the traction check's largest CUSUM while it believed the traction, nats */
     double swap_t;              /* when the truth changed type (-1: it did not) */
     int swap_decl;              /* the type declared then (-1: none) */
     double swap_old_s;          /* how long after the change the old type stayed declared (-1: it was not) */
@@ -316,7 +319,7 @@ static void gauss_of(hstpf_dist_spec_t *sp, const char *opt)
 /* A train on its row: no perturbation, grade, gain bias or missing row. */
 static int on_table(const scenario_t *sc)
 {
-    return sc->perturb == 0.0 && sc->grade_permille == 0.0 && sc->gain_bias == 0.0 && !sc->absent;
+    return sc->perturb == 0.0 && sc->grade_permille == 0.0 && sc->gain_bias == 0.0 && sc->sign_flip_at_s == 0.0 && !sc->absent;
 }
 
 /* The eight trains ORACLE_NEAR from row in W(v) (w_dist_row), one per
@@ -569,6 +572,9 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         double qt;
         hstpf_sim_next_input(&sim, &smp, &in);
         in.traction *= 1.0 + w->sc->gain_bias;
+        if (w->sc->sign_flip_at_s > 0.0 && smp.t >= w->sc->sign_flip_at_s) {
+            in.traction = -in.traction; /* a wiring or a signal definition swapped */
+        }
         if (w->sc->restart_after_s > 0.0 && jr->restart_t < 0.0 && smp.t >= w->sc->restart_after_s && smp.held) {
             /* the positioning unit starts a new run where the train stands */
             jr->restart_t = smp.t;
@@ -713,6 +719,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             }
         }
         jr->still_moving += est.standstill && smp.v > 0.0;
+        jr->trac_fault += est.traction_fault;
+        if (!est.traction_fault && f->tc.cusum > jr->trac_cusum_max) {
+            jr->trac_cusum_max = f->tc.cusum; /* the library's private state: how near a false alarm came */
+        }
         if (est.valid) {
             const double ev = fabs((double)est.speed_mps - smp.v);
             jr->v_bad += ev > 5.0 * (double)est.speed_sd_mps && ev > 0.3;
@@ -1018,6 +1028,10 @@ static const scenario_t scenarios[] = {
     /* the traction unit silent for 20-60 s from 16 s before the departure from the second station */
     {.name = "tracgap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
     {.name = "gain-5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.05},
+    /* traction present but wrong: a gain 20 % low (a motor cut out, reported for all) and, from 16 s
+     * before the departure from the second station, the sign swapped */
+    {.name = "gain-20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.20},
+    {.name = "tracsign", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .sign_flip_at_s = 1010.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
     {.name = "stops-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
@@ -1050,8 +1064,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     int n_tv_all = 0, n_pe_all = 0, n_td_all = 0, n_np = 0, n_td_np = 0, j, i, k;
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
     long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
-    long t_still = 0, t_vbad = 0;
-    int n_still = 0, n_vbad = 0;
+    long t_still = 0, t_vbad = 0, t_tf = 0;
+    int n_still = 0, n_vbad = 0, n_tf = 0;
+    double t_cmax = 0.0;
     double o_pe = 0.0;
     double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
     if (tv_all == NULL || pe_all == NULL || td_all == NULL) {
@@ -1113,6 +1128,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             n_still += q->still_moving > 0;
             t_vbad += q->v_bad;
             n_vbad += q->v_bad > 0;
+            t_tf += q->trac_fault;
+            n_tf += q->trac_fault > 0;
+            t_cmax = q->trac_cusum_max > t_cmax ? q->trac_cusum_max : t_cmax;
         }
         {
             const double tvmax = pct(tv, ntv, 1.0), pe10max = pct(pe, npe, 1.0);
@@ -1180,12 +1198,12 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
                         "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g,"
-                        "\"still_moving\":%ld,\"v_bad\":%ld",
+                        "\"still_moving\":%ld,\"v_bad\":%ld,\"trac_fault\":%ld,\"trac_cusum_max\":%.4g",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
-                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad);
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad, q->trac_fault, q->trac_cusum_max);
                 if (w->sc->restart_after_s > 0.0) {
                     fprintf(jf, ",\"restart_t\":%.0f,\"revalid_s\":%.0f,\"restart_valid\":%.4f,\"restart_pe_max\":%.4g",
                             q->restart_t, q->revalid_s,
@@ -1219,8 +1237,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
     printf("standstill published while the train moved: %ld steps in %d runs; valid steps with the speed more than "
-           "5 sd and 0.3 m/s off: %ld in %d runs\n",
-           t_still, n_still, t_vbad, n_vbad);
+           "5 sd and 0.3 m/s off: %ld in %d runs; the traction taken for wrong (traction_fault) at %ld steps in %d "
+           "runs, its CUSUM while the traction was believed at most %.2f nats\n",
+           t_still, n_still, t_vbad, n_vbad, t_tf, n_tf, t_cmax);
     if (w->sc->trac_gap_at_s > 0.0) { /* the traction unit silent across a departure */
         double *tvg = malloc(sizeof(double) * (size_t)all);
         long bad = 0, still = 0;
@@ -2130,6 +2149,19 @@ int main(int argc, char **argv)
                "(%.1f%%), worst truth's mean W(v) error %.2f%%, position RMS %.3f m, speed RMS %.4f m/s\n",
                runs, 100.0 * tot_s / runs, tot_f, 100.0 * tot_f / runs, tot_w, 100.0 * tot_w / runs,
                100.0 * worst_w, sqrt(sp / runs), sqrt(sv / runs));
+    }
+    {
+        const int runs = w.n_jobs * seeds;
+        long tf = 0;
+        int ntf = 0;
+        double cmax = 0.0;
+        for (i = 0; i < runs; ++i) {
+            tf += w.runs[i].j.trac_fault;
+            ntf += w.runs[i].j.trac_fault > 0;
+            cmax = w.runs[i].j.trac_cusum_max > cmax ? w.runs[i].j.trac_cusum_max : cmax;
+        }
+        printf("the traction taken for wrong (traction_fault) at %ld steps in %d of %d runs; its CUSUM while the "
+               "traction was believed at most %.2f nats\n", tf, ntf, runs, cmax);
     }
     if (st.oracle && on_table(&sc)) {
         print_oracle_on(&w, w.n_jobs * seeds);

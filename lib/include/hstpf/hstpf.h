@@ -324,6 +324,15 @@ typedef struct {
      *  step (the default before the thirteenth session). Other engines
      *  ignore it. */
     uint8_t grid_speed_lattice;
+    /** 1 (default): test on every fix whether the reported traction
+     *  explains the fixes better than no traction would, and take it as
+     *  unknown while it does not (hstpf_estimate_t.traction_fault); 0:
+     *  always believe it. A 2 x 2 Kalman filter per step. The Kalman and
+     *  grid engines; the particle engine ignores it (its Monte Carlo
+     *  likelihoods are too low to test against). Under non-Gaussian
+     *  process noise the test weighs a Gaussian filter against exact
+     *  densities and does not fire. */
+    uint8_t traction_check;
     /** Grid engine under Gaussian process noise (the heavy-tailed fixes
      *  of a GNSS receiver): how many rows are stepped on the grid, those
      *  with the largest weights, [0, HSTPF_MAX_MODELS] (3; 0: every row).
@@ -434,6 +443,12 @@ typedef struct {
      *  some weighted models hold the train at rest, or may have brought it
      *  to rest, and others still move it (its arrival), for at most 10 s. */
     uint8_t standstill;
+    /** 1 while the reported traction explains the fixes worse than no
+     *  traction at all (its sign swapped, a wrong signal; docs/model.md,
+     *  "A traction that cannot be right"): the steps then take it as
+     *  unknown, no weight moves and no type is declared, until it explains
+     *  them better again. 0 with cfg.traction_check off. */
+    uint8_t traction_fault;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
      *  of the rows and the continuous hypothesis. With cfg.refine each row
@@ -576,6 +591,15 @@ typedef struct {
     uint8_t floored;                              /* this fix beyond its likelihood floor */
 } hstpf_refine_t;
 
+/* Private: whether the reported traction can be right (traction_check.c). */
+typedef struct {
+    hstpf_model_t sh;  /* the shadow filter: kx, kp, k0..k2, track_hint */
+    double cusum;      /* of the shadow's log-likelihood against the bank's, nats */
+    uint32_t changes;  /* times the fault was raised or cleared */
+    uint8_t fault;     /* the reported traction explains the fixes worse than none */
+    uint8_t placed;    /* the shadow holds a state */
+} hstpf_trac_check_t;
+
 /**
  * The instance. Caller-owned; all members are private and may change
  * between versions. sizeof(hstpf_t) is the bank's state, O(HSTPF_MAX_MODELS)
@@ -638,6 +662,7 @@ typedef struct {
     double top_m;                    /* furthest posterior position on a fix, absolute m (-inf: none) */
     hstpf_probation_t pr;            /* a lock taken behind top_m */
     hstpf_refine_t rf;
+    hstpf_trac_check_t tc;
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
     uint8_t fit;
     uint8_t engine;                  /* hstpf_engine_t resolved at init (never AUTO) */
