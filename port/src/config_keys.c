@@ -41,6 +41,8 @@ const hstpfd__key_t hstpfd__keys[] = {
     {"gate_m", K_DBL, OFF(gate_m), 0, HSTPF_POS_MAX_M, 0, "outlier gate on the position, m (0 = none)"},
     {"accel_unknown_sd", K_DBL, OFF(accel_unknown_sd), 0, 10, HSTPFD_LO_OPEN,
      "while the traction is stale: the train's acceleration taken as 0 with this sd, m/s^2"},
+    {"traction_check", K_BOOL, OFF(traction_check), 0, 0, 0,
+     "1 = take the traction as unknown while it explains the fixes worse than none (HealthRx.TractImplausible)"},
     {"mass_t", K_DBL, OFF(mass_t), 0, 1e5, HSTPFD_LO_OPEN, "train mass, t (traction kN -> N/kN)"},
     {"step_period_s", K_DBL, OFF(sched.step_period_s), 0, HSTPF_DT_MAX_S, 0,
      "0: a step per valid position frame; else step at most this often (decimate)"},

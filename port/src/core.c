@@ -103,7 +103,11 @@ static void on_step(void *ctx, const hstpfd_step_t *st)
     } else {
         ++c->n.step_err[(rc < 0 && rc >= -10) ? -rc : 0];
     }
-    (void)hstpf_estimate(c->filt, &c->est);
+    {
+        const uint8_t was = c->est.traction_fault;
+        (void)hstpf_estimate(c->filt, &c->est);
+        c->n.trac_implausible += !was && c->est.traction_fault;
+    }
     /* degeneracy of the model we believe in: every particle of the leader at
      * the likelihood floor (ruled-out models are there nearly always) */
     for (l = 0; l < c->est.n_models; ++l) {

@@ -35,6 +35,7 @@ typedef struct {
     uint32_t err_class[HSTPFD_ERR_N_CLASSES];
     uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
     uint32_t degeneracy;
+    uint32_t trac_implausible; /* times the library found the traction implausible (traction_fault raised) */
     uint32_t reacquire; /* restarts of the filter (gap or clock step) */
     uint32_t tx_frames, tx_errors, tx_offline, tx_skipped;
     /* filled by the I/O layer */

@@ -9,7 +9,7 @@ void hstpfd__stream_header(FILE *out, const hstpfd_config_t *cfg)
     uint16_t l;
     int w;
     fputs("t,k,dt,u,y,err,valid,pos,speed,pos_sd,speed_sd,standstill,acquisitions,c0,c1,c2,best,declared,status,"
-          "pos_stale,trac_stale,restart",
+          "pos_stale,trac_stale,restart,trac_implausible",
           out);
     for (w = 0; w < 2; ++w) {
         for (l = 0; l < cfg->n_models; ++l) {
@@ -96,8 +96,8 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
         hstpfd__csv_str(fp, best != NULL ? best : "");
         fputc(',', fp);
         hstpfd__csv_str(fp, decl != NULL ? decl : "");
-        fprintf(fp, ",%s,%u,%u,%u", hstpfd__status_name(e->status), (unsigned)st->pos_stale, (unsigned)st->trac_stale,
-                (unsigned)st->restart);
+        fprintf(fp, ",%s,%u,%u,%u,%u", hstpfd__status_name(e->status), (unsigned)st->pos_stale,
+                (unsigned)st->trac_stale, (unsigned)st->restart, (unsigned)e->traction_fault);
         for (l = 0; l < e->n_models; ++l) {
             fputc(',', fp);
             hstpfd__out_num(fp, 1, (double)e->model[l].q, 9);
@@ -149,6 +149,7 @@ void hstpfd__write_step(hstpfd_core_t *c, const hstpfd_step_t *st, int32_t rc)
     } else {
         fputs("null", fp);
     }
-    fprintf(fp, ",\"status\":\"%s\",\"pos_stale\":%u,\"trac_stale\":%u,\"restart\":%u}\n",
-            hstpfd__status_name(e->status), (unsigned)st->pos_stale, (unsigned)st->trac_stale, (unsigned)st->restart);
+    fprintf(fp, ",\"status\":\"%s\",\"pos_stale\":%u,\"trac_stale\":%u,\"restart\":%u,\"trac_implausible\":%u}\n",
+            hstpfd__status_name(e->status), (unsigned)st->pos_stale, (unsigned)st->trac_stale, (unsigned)st->restart,
+            (unsigned)e->traction_fault);
 }

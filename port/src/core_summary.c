@@ -118,6 +118,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "stale_events", (unsigned long)(p->stale + t->stale), 0);
     kv(fp, "position_stale", (unsigned long)s->pos_stale, 0);
     kv(fp, "traction_stale", (unsigned long)s->trac_stale, 0);
+    kv(fp, "traction_implausible", (unsigned long)c->n.trac_implausible, 0);
     kv(fp, "position_invalid", (unsigned long)c->n.pos_invalid, 0);
     kv(fp, "position_range", (unsigned long)c->n.pos_range, 0);
     kv(fp, "traction_invalid", (unsigned long)c->n.trac_invalid, 0);

@@ -91,6 +91,7 @@ static void tx_values(const hstpfd_core_t *c, unsigned i, hstpfd_tx_values_t *v)
     }
     v->pos_stale = c->sched.pos_stale;
     v->trac_stale = c->sched.trac_stale;
+    v->trac_fault = c->est.traction_fault;
     v->bad_crc = p->bad_crc + t->bad_crc;
     v->repeated = p->repeated + t->repeated;
     v->jump = p->jump + t->jump;

@@ -194,6 +194,7 @@ int hstpfd_tx_encode(hstpfd_tx_state_t *st, unsigned i, const hstpfd_tx_values_t
         (void)hstpf_can_health_rx_init(&m);
         m.pos_stale = v->pos_stale ? 1u : 0u;
         m.tract_stale = v->trac_stale ? 1u : 0u;
+        m.tract_implausible = v->trac_fault ? 1u : 0u;
         m.bad_crc = hstpf_frames_health_rx_bad_crc_raw(count(v->bad_crc));
         m.counter_repeat = hstpf_frames_health_rx_counter_repeat_raw(count(v->repeated));
         m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(count(v->jump));

@@ -82,6 +82,7 @@ typedef struct {
     uint8_t off_what;         /* HSTPF_OFF_* bits */
     double w_sd[HSTPFD_BAND_N]; /* sd of W(v) at HSTPFD_BAND_STEP_KMH x k, N/kN */
     uint8_t pos_stale, trac_stale;
+    uint8_t trac_fault;       /* hstpf_estimate_t.traction_fault */
     uint32_t bad_crc, repeated, jump, wrong_length; /* summed over the inputs */
     uint32_t stale_events, unknown_id, error_frames, degeneracy;
     uint32_t clock_fwd, clock_back, late, reacquire;

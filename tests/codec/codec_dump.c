@@ -190,13 +190,14 @@ static void est_band(double valid, double fault, const double sd[5], double off)
            hstpf_can_est_band_off_what_decode(m.off_what));
 }
 
-static void health_rx(double ps, double ts, double crc, double rep, double jump, double len)
+static void health_rx(double ps, double ts, double ti, double crc, double rep, double jump, double len)
 {
     struct hstpf_can_health_rx_t m;
     uint8_t f[8];
     hstpf_can_health_rx_init(&m);
     m.pos_stale = hstpf_frames_health_rx_pos_stale_raw(ps);
     m.tract_stale = hstpf_frames_health_rx_tract_stale_raw(ts);
+    m.tract_implausible = hstpf_frames_health_rx_tract_implausible_raw(ti);
     m.bad_crc = hstpf_frames_health_rx_bad_crc_raw(crc);
     m.counter_repeat = hstpf_frames_health_rx_counter_repeat_raw(rep);
     m.counter_jump = hstpf_frames_health_rx_counter_jump_raw(jump);
@@ -205,13 +206,13 @@ static void health_rx(double ps, double ts, double crc, double rep, double jump,
     hstpf_e2e_protect(tx_for(HSTPF_FRAME_HEALTH_RX_ID), f, 8);
     hstpf_can_health_rx_unpack(&m, f, 8);
     head("HealthRx", HSTPF_FRAME_HEALTH_RX_ID, f);
-    printf("\"in\":{\"PosStale\":%.17g,\"TractStale\":%.17g,\"BadCrc\":%.17g,\"CounterRepeat\":%.17g,"
-           "\"CounterJump\":%.17g,\"WrongLength\":%.17g},",
-           ps, ts, crc, rep, jump, len);
-    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosStale\":%u,\"TractStale\":%u,\"BadCrc\":%u,"
-           "\"CounterRepeat\":%u,\"CounterJump\":%u,\"WrongLength\":%u}}\n",
-           m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.bad_crc, m.counter_repeat, m.counter_jump,
-           m.wrong_length);
+    printf("\"in\":{\"PosStale\":%.17g,\"TractStale\":%.17g,\"TractImplausible\":%.17g,\"BadCrc\":%.17g,"
+           "\"CounterRepeat\":%.17g,\"CounterJump\":%.17g,\"WrongLength\":%.17g},",
+           ps, ts, ti, crc, rep, jump, len);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"PosStale\":%u,\"TractStale\":%u,\"TractImplausible\":%u,"
+           "\"BadCrc\":%u,\"CounterRepeat\":%u,\"CounterJump\":%u,\"WrongLength\":%u}}\n",
+           m.e2e_crc, m.e2e_counter, m.pos_stale, m.tract_stale, m.tract_implausible, m.bad_crc, m.counter_repeat,
+           m.counter_jump, m.wrong_length);
 }
 
 static void health_sys(double stale, double unk, double err, double deg)
@@ -314,8 +315,8 @@ static void encode_set(void)
     est_theta(1, 0, 0.79, 0.0064, 0.000115);
     est_theta(1, 0, 2.25, 0.019, 0.00032);
     est_theta(1, 1, 65.535, 0.065535, 0.0013107);
-    health_rx(0, 0, 0, 0, 0, 0);
-    health_rx(1, 0, 17, 3, 4095, 1);
+    health_rx(0, 0, 0, 0, 0, 0, 0);
+    health_rx(1, 0, 1, 17, 3, 4095, 1);
     health_sys(2, 0, 41, 4095);
     health_sys(0, 1, 0, 0);
     health_time(1, 2, 37, 1023, 5);

@@ -65,7 +65,7 @@ def test_c_decodes_python_frames(codec_dump, tmp_path):
         ("EstBand", {"BandValid": 1, "BandFault": 0, "WSd0": 0.25, "WSd1": 0.35, "WSd2": 1.2, "WSd3": 2.6, "WSd4": 4.3,
                      "OffWhat": 2}),
         ("EstTheta", {"ThetaValid": 1, "C0": 0.79, "C1": 0.0064, "C2": 0.000115}),
-        ("HealthRx", {"PosStale": 1, "BadCrc": 12, "CounterRepeat": 3, "CounterJump": 4095, "WrongLength": 7}),
+        ("HealthRx", {"PosStale": 1, "TractImplausible": 1, "BadCrc": 12, "CounterRepeat": 3, "CounterJump": 4095, "WrongLength": 7}),
         ("HealthSys", {"StaleEvents": 2, "UnknownId": 5, "ErrorFrames": 1, "Degeneracy": 9}),
         ("EstQuality", {"QualValid": 1, "Standstill": 1, "EstTimeValid": 1, "PositionSd": 3.21, "SpeedSd": 0.17,
                         "EstTime": 4321}),

@@ -6,7 +6,12 @@
 - the traction unit is silent for a minute across a departure: the daemon
   feeds the steps as traction unknown. Before, it fed the last value (the
   holding brake), and the estimate was published at rest, speed 0 +- 0,
-  while the train moved off."""
+  while the train moved off;
+- the traction unit reports its effort with the sign swapped from a
+  station stop on: the library finds it implausible (HealthRx's
+  TractImplausible, the summary's traction_implausible) and takes it as
+  unknown. Before, every model was driven the wrong way: the estimate was
+  published metres and m/s off as valid and a wrong type declared."""
 import csv
 import json
 import os
@@ -84,3 +89,46 @@ def test_traction_gap_across_a_departure(root, tmp_path):
     assert n_valid >= 100  # of 120: still published through the gap
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["faults"]["traction_stale"] == 1
+
+
+def test_traction_sign_swapped(root, tmp_path):
+    exe = _hstpfd(root)
+    log, bad, out = tmp_path / "run.log", tmp_path / "bad.log", tmp_path / "frames.log"
+    # at rest at the line's first station from about 447 s, departing at about 567 s
+    assert simulate.main(["--profile", "line", "--duration", "900", "--seed", "4", "-o", str(log),
+                          "--json", str(tmp_path / "sim.json")]) == 0
+    codec = FrameCodec()
+    tid = codec.message(TRACTION).frame_id
+    from hstpf_tools.logio import message
+    msgs = []
+    for m in read_log(str(log)):
+        if m.arbitration_id == tid:  # re-encoded in order: the E2E counters stay in sequence
+            _, dec, _ = FrameCodec().decode(tid, bytes(m.data), check=False)
+            force = -dec["TractForce"] if m.timestamp >= 480.0 else dec["TractForce"]
+            _, data = codec.encode(TRACTION, {"TractValid": dec["TractValid"], "TractForce": force})
+            m = message(m.timestamp, tid, data)
+        msgs.append(m)
+    write_log(str(bad), msgs)
+    subprocess.run([str(exe), "--log", str(bad), "--models", "all", "--noise", "case1", "--out",
+                    str(tmp_path / "steps.jsonl"), "--summary", str(tmp_path / "summary.json"),
+                    "--set", "frames_out=" + str(out)], check=True, capture_output=True)
+    truth = _truth(tmp_path / "run_truth.csv")
+    steps = [json.loads(ln) for ln in (tmp_path / "steps.jsonl").read_text().splitlines()]
+    raised = [s["t"] for s in steps if s["trac_implausible"]]
+    assert raised and 480 < raised[0] < 567  # found at the station, before the departure
+    assert all(s["trac_implausible"] for s in steps if s["t"] >= raised[0])
+    assert not any(s["trac_implausible"] for s in steps if s["t"] < 480)
+    after = [s for s in steps if s["t"] >= raised[0]]
+    assert len({s["declared"] for s in after}) == 1  # nothing declared or withdrawn on it
+    for s in after:
+        if s["valid"]:
+            p, v = truth[round(s["t"])]
+            assert abs(s["pos"] - p) <= 5 * s["pos_sd"] + 1.0, s
+            assert abs(s["speed"] - v) <= 5 * s["speed_sd"] + 0.3, s
+    assert sum(s["valid"] for s in after) >= len(after) - 10
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["faults"]["traction_implausible"] == 1
+    hid = codec.message("HealthRx").frame_id
+    bits = [FrameCodec().decode(hid, bytes(m.data), check=False)[1]["TractImplausible"]
+            for m in read_log(str(out)) if m.arbitration_id == hid]
+    assert bits and bits[-1] == 1 and bits[0] == 0

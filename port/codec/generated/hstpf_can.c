@@ -1661,6 +1661,7 @@ int hstpf_can_health_rx_pack(
     dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
     dst_p[1] |= pack_left_shift_u8(src_p->pos_stale, 4u, 0x10u);
     dst_p[1] |= pack_left_shift_u8(src_p->tract_stale, 5u, 0x20u);
+    dst_p[1] |= pack_left_shift_u8(src_p->tract_implausible, 6u, 0x40u);
     dst_p[2] |= pack_left_shift_u16(src_p->bad_crc, 0u, 0xffu);
     dst_p[3] |= pack_right_shift_u16(src_p->bad_crc, 8u, 0x0fu);
     dst_p[3] |= pack_left_shift_u16(src_p->counter_repeat, 4u, 0xf0u);
@@ -1686,6 +1687,7 @@ int hstpf_can_health_rx_unpack(
     dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
     dst_p->pos_stale = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
     dst_p->tract_stale = unpack_right_shift_u8(src_p[1], 5u, 0x20u);
+    dst_p->tract_implausible = unpack_right_shift_u8(src_p[1], 6u, 0x40u);
     dst_p->bad_crc = unpack_right_shift_u16(src_p[2], 0u, 0xffu);
     dst_p->bad_crc |= unpack_left_shift_u16(src_p[3], 8u, 0x0fu);
     dst_p->counter_repeat = unpack_right_shift_u16(src_p[3], 4u, 0xf0u);
@@ -1785,6 +1787,26 @@ bool hstpf_can_health_rx_tract_stale_is_in_range(uint8_t value)
 }
 
 bool hstpf_can_health_rx_tract_stale_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint8_t hstpf_can_health_rx_tract_implausible_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_health_rx_tract_implausible_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_health_rx_tract_implausible_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_health_rx_tract_implausible_is_in_phys_range(double value)
 {
     return ((value >= 0.0) && (value <= 1.0));
 }

@@ -252,6 +252,7 @@ extern "C" {
 #define HSTPF_CAN_HEALTH_RX_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_HEALTH_RX_POS_STALE_NAME "PosStale"
 #define HSTPF_CAN_HEALTH_RX_TRACT_STALE_NAME "TractStale"
+#define HSTPF_CAN_HEALTH_RX_TRACT_IMPLAUSIBLE_NAME "TractImplausible"
 #define HSTPF_CAN_HEALTH_RX_BAD_CRC_NAME "BadCrc"
 #define HSTPF_CAN_HEALTH_RX_COUNTER_REPEAT_NAME "CounterRepeat"
 #define HSTPF_CAN_HEALTH_RX_COUNTER_JUMP_NAME "CounterJump"
@@ -807,6 +808,15 @@ struct hstpf_can_health_rx_t {
      * Offset: 0
      */
     uint8_t tract_stale;
+
+    /**
+     * 1: the traction received explains the positions worse than no traction would (its sign swapped, a wrong signal; hstpf_estimate_t.traction_fault): the estimator takes it as unknown, no model weight moves and no type is declared.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t tract_implausible;
 
     /**
      * Frames rejected for a CRC mismatch.
@@ -3467,6 +3477,46 @@ bool hstpf_can_health_rx_tract_stale_is_in_range(uint8_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_health_rx_tract_stale_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_health_rx_tract_implausible_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_health_rx_tract_implausible_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_rx_tract_implausible_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_health_rx_tract_implausible_is_in_phys_range(double value);
 
 /**
  * Encode given signal by applying scaling and offset.

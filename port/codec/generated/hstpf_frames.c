@@ -257,6 +257,11 @@ uint8_t hstpf_frames_health_rx_tract_stale_raw(double phys)
     return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
 }
 
+uint8_t hstpf_frames_health_rx_tract_implausible_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
 uint16_t hstpf_frames_health_rx_bad_crc_raw(double phys)
 {
     return (uint16_t)raw_sat(phys, 1.0, 0.0, 0.0, 4095.0);

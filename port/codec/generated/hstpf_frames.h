@@ -209,6 +209,8 @@ uint8_t hstpf_frames_est_band_off_what_raw(double phys);
 uint8_t hstpf_frames_health_rx_pos_stale_raw(double phys);
 /** HealthRx.TractStale: scale 1, [0, 1]. */
 uint8_t hstpf_frames_health_rx_tract_stale_raw(double phys);
+/** HealthRx.TractImplausible: scale 1, [0, 1]. */
+uint8_t hstpf_frames_health_rx_tract_implausible_raw(double phys);
 /** HealthRx.BadCrc: scale 1, [0, 4095]. */
 uint16_t hstpf_frames_health_rx_bad_crc_raw(double phys);
 /** HealthRx.CounterRepeat: scale 1, [0, 4095]. */
