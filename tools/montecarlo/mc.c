@@ -1547,6 +1547,7 @@ static void usage_to(FILE *out)
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine | --refine-any-noise] [--refine-prior Q] [--refine-spread X]\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "  [--gap-hold]  (tracgap scenarios: the gap feeds the last traction, as hstpfd did before, not 'unknown')\n"
+            "  [--no-traction-check]  (cfg.traction_check = 0: the traction always believed)\n"
             "  [--oracle]  (a second bank on the same inputs: off the table the truth's own theta beside its 4 nearest\n"
             "              rows, on it the truth's row beside 8 trains 10 %% from it; when the data tell them apart.\n"
             "              Not a filter setting)\n"
@@ -1812,6 +1813,10 @@ int main(int argc, char **argv)
         }
         if (!strcmp(a, "--gauss-e")) {
             st.gauss_e = 1;
+            continue;
+        }
+        if (!strcmp(a, "--no-traction-check")) {
+            st.base.traction_check = 0;
             continue;
         }
         if (!strcmp(a, "--gap-hold")) {
