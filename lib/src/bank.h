@@ -65,5 +65,8 @@ void hstpf__trac_check_shift(hstpf_t *f, double d);
 /* estimate.c */
 void hstpf__blend_weights(const hstpf_t *f, double *wb);
 double hstpf__blended_position(const hstpf_t *f, double dt_ahead);
+/* The bank's predictive log-likelihood of this step's fix: the weighted
+ * hypotheses' increments mixed by the weights before the step's update. */
+double hstpf__bank_loglik(const hstpf_t *f);
 
 #endif

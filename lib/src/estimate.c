@@ -27,6 +27,25 @@ void hstpf__blend_weights(const hstpf_t *f, double *wb)
     }
 }
 
+/* The bank's predictive log-likelihood of this fix: the weighted models'
+ * increments mixed by the weights before this step's update. */
+double hstpf__bank_loglik(const hstpf_t *f)
+{
+    double wb[HSTPF_MAX_MODELS + 1], mx = -HUGE_VAL, sum = 0.0;
+    uint16_t l;
+    const uint16_t nh = hstpf__n_hyp(f);
+    hstpf__blend_weights(f, wb);
+    for (l = 0; l < nh; ++l) {
+        const double ll = l < f->cfg.n_models ? (double)f->m[l].loglik : f->rf.loglik;
+        mx = wb[l] > 0.0 && ll > mx ? ll : mx;
+    }
+    for (l = 0; l < nh; ++l) {
+        const double ll = l < f->cfg.n_models ? (double)f->m[l].loglik : f->rf.loglik;
+        sum += wb[l] > 0.0 ? wb[l] * exp(ll - mx) : 0.0;
+    }
+    return mx + log(sum);
+}
+
 double hstpf__blended_position(const hstpf_t *f, double dt_ahead)
 {
     double s = 0.0, wb[HSTPF_MAX_MODELS + 1];

@@ -71,25 +71,6 @@ void hstpf__trac_check_begin(hstpf_t *f, int traction_known)
     }
 }
 
-/* The bank's predictive log-likelihood of this fix: the weighted models'
- * increments mixed by the weights before this step's update. */
-static double bank_loglik(const hstpf_t *f)
-{
-    double wb[HSTPF_MAX_MODELS + 1], mx = -HUGE_VAL, sum = 0.0;
-    uint16_t l;
-    const uint16_t nh = hstpf__n_hyp(f);
-    hstpf__blend_weights(f, wb);
-    for (l = 0; l < nh; ++l) {
-        const double ll = l < f->cfg.n_models ? (double)f->m[l].loglik : f->rf.loglik;
-        mx = wb[l] > 0.0 && ll > mx ? ll : mx;
-    }
-    for (l = 0; l < nh; ++l) {
-        const double ll = l < f->cfg.n_models ? (double)f->m[l].loglik : f->rf.loglik;
-        sum += wb[l] > 0.0 ? wb[l] * exp(ll - mx) : 0.0;
-    }
-    return mx + log(sum);
-}
-
 void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, double traction, int test)
 {
     hstpf_trac_check_t *c = &f->tc;
@@ -132,7 +113,7 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, double trac
     }
     /* positive: the shadow (without the traction, or while the fault
      * stands with it) explains the fix better than the bank does */
-    r = ll_sh - bank_loglik(f);
+    r = ll_sh - hstpf__bank_loglik(f);
     r = r > HSTPF__TRAC_CLIP ? HSTPF__TRAC_CLIP : (r < -HSTPF__TRAC_CLIP ? -HSTPF__TRAC_CLIP : r);
     c->cusum = c->cusum + r > 0.0 ? c->cusum + r : 0.0;
     if (c->cusum > (c->fault ? HSTPF__TRAC_NATS_BACK : HSTPF__TRAC_NATS)) {
