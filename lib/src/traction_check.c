@@ -19,6 +19,7 @@
 
 #include "bank.h"
 #include "engine.h"
+#include "refine.h"
 #include "track.h"
 
 /* The shadow placed at the leading row's posterior (every engine publishes
@@ -54,10 +55,12 @@ void hstpf__trac_check_reset(hstpf_t *f)
 
 /* Not on the particle engine: its likelihoods are Monte Carlo estimates, a
  * few nats low at M = 100, and the test fired on a true traction (paper
- * Case 1: 2 of 3 runs) */
+ * Case 1: 2 of 3 runs). Not under non-Gaussian process noise: the shadow,
+ * a Gaussian filter, would be weighed against the grid's exact densities
+ * (Case 2: it never came near) */
 static int checking(const hstpf_t *f)
 {
-    return f->cfg.traction_check && f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE;
+    return f->cfg.traction_check && f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && hstpf__process_gaussian(&f->cfg);
 }
 
 void hstpf__trac_check_begin(hstpf_t *f, int traction_known)

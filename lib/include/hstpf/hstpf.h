@@ -328,10 +328,10 @@ typedef struct {
      *  explains the fixes better than no traction would, and take it as
      *  unknown while it does not (hstpf_estimate_t.traction_fault); 0:
      *  always believe it. A 2 x 2 Kalman filter per step. The Kalman and
-     *  grid engines; the particle engine ignores it (its Monte Carlo
-     *  likelihoods are too low to test against). Under non-Gaussian
-     *  process noise the test weighs a Gaussian filter against exact
-     *  densities and does not fire. */
+     *  grid engines under Gaussian process noise (any fix noise); not the
+     *  particle engine (its Monte Carlo likelihoods are too low to test
+     *  against), nor non-Gaussian process noise (a Gaussian filter weighed
+     *  against exact densities never wins). */
     uint8_t traction_check;
     /** Grid engine under Gaussian process noise (the heavy-tailed fixes
      *  of a GNSS receiver): how many rows are stepped on the grid, those
