@@ -422,7 +422,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     has_y = has_y && !gated;
     /* all checks passed: from here on the step cannot fail */
     e = hstpf__engine_of(f);
-    hstpf__trac_check_begin(f, !free_run);
+    hstpf__trac_check_begin(f, !free_run, in->dt_s);
     trac_known = !free_run;
     free_run = free_run || f->tc.fault; /* a traction that cannot be right is not used */
     xu = free_run ? free_xu(f, -1.0) : f->xi * in->traction;
@@ -458,7 +458,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
     }
     if (trac_known) { /* a lone outlier, or a lock on probation, tests nothing */
-        hstpf__trac_check_end(f, &st, in->traction, f->lost_run != 1u && !f->pr.active);
+        hstpf__trac_check_end(f, &st, f->lost_run != 1u && !f->pr.active);
     }
     /* The first such fix after fixes they fitted is taken for an outlier
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at

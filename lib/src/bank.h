@@ -42,23 +42,20 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 
 /* traction_check.c: a CUSUM over per-step log-likelihood ratios, each
  * clipped to +-HSTPF__TRAC_CLIP nats, raises the fault at
- * HSTPF__TRAC_NATS and clears it at HSTPF__TRAC_NATS_BACK. Raising: with a
- * true traction the CUSUM reached 14.6 nats at most in 340 runs of `day`
- * (4.9 M steps; hstpf-mc). Clearing: the traction then competes with the
- * unknown acceleration's 0.5 m/s^2, which follows a train's own moves well
- * (about 0.3 nats a step while accelerating, less at constant speed), and
- * a wrong traction that is believed again is found again */
+ * HSTPF__TRAC_NATS: with a true traction it reached 14.6 nats at most in
+ * 340 runs of `day` (4.9 M steps; hstpf-mc) */
 #define HSTPF__TRAC_CLIP 3.0
 #define HSTPF__TRAC_NATS 25.0
-#define HSTPF__TRAC_NATS_BACK 10.0
+#define HSTPF__TRAC_SETTLE 3 /* fixes a newly placed shadow does not test */
 void hstpf__trac_check_reset(hstpf_t *f);
-/* Before the bank steps: places the shadow if it has none (traction_known
- * 0: nothing to test this step, and the shadow is dropped). */
-void hstpf__trac_check_begin(hstpf_t *f, int traction_known);
+/* Before the bank steps: whether the fault stands this step (it ends
+ * HSTPF_TRAC_RETRY_S after it was raised, and on a step whose traction is
+ * unknown), and the shadow placed if it has none. */
+void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt);
 /* After the bank stepped, before its weights move: the shadow steps on st
- * (the bank's step) with the reported traction or without it; with test,
- * and a fix, the CUSUM takes this fix. */
-void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *st, double traction, int test);
+ * (the bank's step) without the traction; with test, and a fix, the CUSUM
+ * takes this fix. */
+void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *st, int test);
 /* The origin moved by +d. */
 void hstpf__trac_check_shift(hstpf_t *f, double d);
 

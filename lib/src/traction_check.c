@@ -8,12 +8,14 @@
  * scores each fix beside the bank; a CUSUM of the log-likelihood ratio
  * (each step's clipped at HSTPF__TRAC_CLIP nats, so that a lone outlier
  * in a heavy tail cannot do it) past HSTPF__TRAC_NATS says the traction
- * explains the fixes worse than no traction at all. From then on the
- * steps run as if the traction were unknown (the weights wait, the
- * declaration's hold does not run), and the shadow runs the other way:
- * the reported traction through the blended theta, until it has explained
- * the fixes better than the bank without it by the same margin
- * (docs/model.md, "A traction that cannot be right"). */
+ * explains the fixes worse than no traction at all. From then on, for
+ * HSTPF_TRAC_RETRY_S, the steps run as if the traction were unknown (the
+ * weights wait, the declaration's hold does not run); then it is believed
+ * and tested again (found again within that time after a retry: the next
+ * wait is twice as long, up to 4 times). Sooner if the caller reports the
+ * traction unknown (its source went away: what comes back may be right). Why not a test of the
+ * traction coming right: docs/model.md, "A traction that cannot be
+ * right". */
 #include <math.h>
 #include <string.h>
 
@@ -21,37 +23,6 @@
 #include "engine.h"
 #include "refine.h"
 #include "track.h"
-
-/* The shadow placed at the leading row's posterior (every engine publishes
- * its means and variances), with the theta it runs. */
-static void place(hstpf_t *f)
-{
-    hstpf_trac_check_t *c = &f->tc;
-    const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
-    double wb[HSTPF_MAX_MODELS + 1], th[3] = {0.0, 0.0, 0.0};
-    uint16_t l;
-    memset(&c->sh, 0, sizeof c->sh);
-    c->sh.kx[0] = (double)m->s_mean;
-    c->sh.kx[1] = (double)m->v_mean;
-    c->sh.kp[0] = (double)m->s_var;
-    c->sh.kp[2] = (double)m->v_var;
-    if (c->fault) { /* the reported traction through the blended rows */
-        hstpf__blend_weights(f, wb);
-        for (l = 0; l < f->cfg.n_models; ++l) {
-            th[0] += wb[l] * f->theta[l].c0;
-            th[1] += wb[l] * f->theta[l].c1;
-            th[2] += wb[l] * f->theta[l].c2;
-        }
-        hstpf__model_set_theta(f, &c->sh, th[0], th[1], th[2]);
-    }
-    c->placed = 1;
-    c->cusum = 0.0;
-}
-
-void hstpf__trac_check_reset(hstpf_t *f)
-{
-    memset(&f->tc, 0, sizeof f->tc);
-}
 
 /* Not on the particle engine: its likelihoods are Monte Carlo estimates, a
  * few nats low at M = 100, and the test fired on a true traction (paper
@@ -63,66 +34,107 @@ static int checking(const hstpf_t *f)
     return f->cfg.traction_check && f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && hstpf__process_gaussian(&f->cfg);
 }
 
-void hstpf__trac_check_begin(hstpf_t *f, int traction_known)
+/* The shadow placed at the leading row's posterior (every engine publishes
+ * its means and variances). */
+static void place(hstpf_t *f)
 {
-    if (!checking(f) || !traction_known) {
-        f->tc.placed = 0; /* nothing to test: placed again at the next known traction */
+    hstpf_trac_check_t *c = &f->tc;
+    const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
+    memset(&c->sh, 0, sizeof c->sh);
+    c->sh.kx[0] = (double)m->s_mean;
+    c->sh.kx[1] = (double)m->v_mean;
+    c->sh.kp[0] = (double)m->s_var;
+    c->sh.kp[2] = (double)m->v_var;
+    c->placed = 1;
+    c->settle = HSTPF__TRAC_SETTLE;
+}
+
+void hstpf__trac_check_reset(hstpf_t *f)
+{
+    memset(&f->tc, 0, sizeof f->tc);
+}
+
+void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt)
+{
+    hstpf_trac_check_t *c = &f->tc;
+    if (!checking(f)) {
+        c->fault = 0;
+        c->placed = 0;
         return;
     }
-    if (!f->tc.placed) {
-        place(f);
+    if (!traction_known) { /* nothing to test; what comes back is believed */
+        c->fault = 0;
+        c->cusum = 0.0;
+        c->placed = 0;
+        return;
+    }
+    c->since_retry_s += dt;
+    if (c->fault) {
+        c->fault_s += dt;
+        if (c->fault_s < c->retry_s) {
+            return;
+        }
+        c->fault = 0; /* believed again, and tested again */
+        c->cusum = 0.0;
+        c->placed = 0;
+        c->since_retry_s = 0.0;
+    }
+    if (!c->placed) {
+        place(f); /* its CUSUM kept: a lock lost and taken again (a wrong
+                   * traction loses it) does not wipe the evidence */
     }
 }
 
-void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, double traction, int test)
+void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test)
 {
     hstpf_trac_check_t *c = &f->tc;
     hstpf__step_t st = *bank_st;
+    uint16_t hint = c->sh.track_hint;
     uint8_t held;
     int floored;
     double ll_sh, r;
-    if (!checking(f) || !c->placed) {
+    if (!checking(f) || c->fault || !c->placed) {
         return;
     }
-    if (c->fault) { /* the shadow believes the traction */
-        st.free_run = 0;
-        st.xu = f->xi * traction;
-        st.acc_var = 0.0;
-    } else { /* the shadow does not: acceleration 0 with accel_unknown_sd */
-        uint16_t hint = c->sh.track_hint;
-        st.free_run = 1;
-        st.xu = (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, (real)c->sh.kx[0]) : 0.0) + 1e-3;
-        st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt * f->cfg.dt_nominal_s;
-    }
+    /* the shadow does not use the traction: acceleration 0 with accel_unknown_sd */
+    st.free_run = 1;
+    st.xu = (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, (real)c->sh.kx[0]) : 0.0) + 1e-3;
+    st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt * f->cfg.dt_nominal_s;
     ll_sh = hstpf__kalman_step(f, &c->sh, &st, &held, &floored);
     if (!(isfinite(ll_sh) && isfinite(c->sh.kx[0]) && isfinite(c->sh.kx[1]))) {
         c->placed = 0;
         return;
     }
-    {
-        const hstpf_model_t *g = &f->m[hstpf__leading_row(f)];
-        if (hstpf__kalman_lost(g, c->sh.kx[0], c->sh.kx[1], c->sh.kp[0], c->sh.kp[2])) {
-            /* a wrong traction drove it away from the bank (engine.h's
-             * rule): placed again, its CUSUM kept; it tests from the next
-             * fix */
-            const double keep = c->cusum;
-            place(f);
-            c->cusum = keep;
-            return;
-        }
+    if (hstpf__kalman_lost(&f->m[hstpf__leading_row(f)], c->sh.kx[0], c->sh.kx[1], c->sh.kp[0], c->sh.kp[2])) {
+        place(f); /* far from the bank (engine.h's rule): placed again, its CUSUM kept */
+        return;
     }
     if (!test || !st.has_y) {
         return;
     }
-    /* positive: the shadow (without the traction, or while the fault
-     * stands with it) explains the fix better than the bank does */
+    if (c->settle > 0u) {
+        /* a shadow just placed predicts the next position from the bank's
+         * speed, not yet from its own acceleration, and with the bank's
+         * spread: its first fixes tell little */
+        --c->settle;
+        return;
+    }
+    /* positive: no traction explains the fix better than the bank with it */
     r = ll_sh - hstpf__bank_loglik(f);
     r = r > HSTPF__TRAC_CLIP ? HSTPF__TRAC_CLIP : (r < -HSTPF__TRAC_CLIP ? -HSTPF__TRAC_CLIP : r);
     c->cusum = c->cusum + r > 0.0 ? c->cusum + r : 0.0;
-    if (c->cusum > (c->fault ? HSTPF__TRAC_NATS_BACK : HSTPF__TRAC_NATS)) {
-        c->fault = (uint8_t)!c->fault;
+    if (c->cusum > HSTPF__TRAC_NATS) {
+        /* found again soon after a retry: the fault stands, wait longer
+         * before the next (each retry publishes the wrong traction's
+         * estimate until it is found again) */
+        const double base = HSTPF_TRAC_RETRY_S;
+        c->retry_s = c->changes > 0u && c->since_retry_s < base ? 2.0 * c->retry_s : base;
+        c->retry_s = c->retry_s < 4.0 * base ? c->retry_s : 4.0 * base;
+        c->fault = 1;
+        c->fault_s = 0.0;
+        c->cusum = 0.0;
+        c->placed = 0;
         ++c->changes;
-        place(f);
     }
 }
 

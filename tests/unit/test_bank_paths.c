@@ -999,35 +999,39 @@ static void test_traction_unknown(void **state)
 
 /* The traction present but wrong: from 30 s, while the train stands with
  * the holding brake, it is reported with its sign swapped (+50 N/kN, then
- * braking while the train departs at 62 s, 0.5 m/s^2 to 40 m/s at 142 s),
- * right again from 120 s. Without the check every model was driven the wrong way, the
- * estimate published metres and m/s off as valid and the weights moved to
- * a wrong type (hstpf-mc --scenario tracsign: a wrong type declared in
- * every run). Now: traction_fault is raised before the departure; while it
- * stands no weight moves (bit for bit); every valid step after the raise
- * is within 5 sd (+1 m, +0.3 m/s); it clears within a minute of the
- * traction being right (42 s here: against the unknown acceleration the
- * traction earns about 0.3 nats a step while the train accelerates), and
- * the weights move again. The same run with the sign
- * right throughout never raises it. Kalman and grid; the particle engine
- * does not test (hstpf.h). */
-static void run_traction_wrong(hstpf_engine_t engine, int flip, int *t_raise, int *t_clear)
+ * braking while the train departs at 62 s, 0.5 m/s^2 to 40 m/s at 142 s,
+ * then 40 m/s), right again from 120 s. Without the check every model was
+ * driven the wrong way, the estimate published metres and m/s off as
+ * valid and the weights moved to a wrong type (hstpf-mc --scenario
+ * tracsign: a wrong type declared in every run). Now: traction_fault is
+ * raised before the departure; while it stands no weight moves (bit for
+ * bit) and nothing is declared; every valid step after the raise is within
+ * 5 sd (+1 m, +0.3 m/s); it ends HSTPF_TRAC_RETRY_S after it was raised
+ * (the traction right by then: it is not raised again, and the weights
+ * move again), or (unknown = 1) at the first step whose traction the
+ * caller reports unknown, at 200 s. The same run with the sign right
+ * throughout never raises it. Kalman and grid; the particle engine does
+ * not test (hstpf.h). */
+static void run_traction_wrong(hstpf_engine_t engine, int flip, int unknown, int *t_raise, int *t_clear)
 {
     hstpf_config_t c;
     hstpf_estimate_t e, at_raise;
-    int k, l, moved_after = 0;
+    const int n = 60 + (int)HSTPF_TRAC_RETRY_S + 60;
+    int k, l, moved_after = 0, raises = 0;
     base_config(&c, engine, 2);
     start(&c);
     *t_raise = *t_clear = -1;
     memset(&at_raise, 0, sizeof at_raise);
-    for (k = 1; k <= 240; ++k) { /* 0.5 m/s^2 to 40 m/s at 142 s, then 40 m/s */
+    for (k = 1; k <= n; ++k) {
         const double t = k > 62 ? (k < 142 ? k - 62.0 : 80.0) : 0.0, v = 0.5 * t;
-        const double y = Y0 + 0.25 * t * t + (k < 142 ? 0.0 : 40.0 * (k - 142)) + 2.0 * sin(1.7 * k);
+        const double s_true = Y0 + 0.25 * t * t + (k < 142 ? 0.0 : 40.0 * (k - 142));
         const double u = k <= 60 ? -50.0 : hstpf_resistance(&rows[0], v) + (k < 142 ? 0.5 / f.xi : 0.0);
-        const hstpf_input_t in = tu_input(1.0, flip && k > 30 && k <= 120 ? -u : u, y, 1);
+        hstpf_input_t in = tu_input(1.0, flip && k > 30 && k <= 120 ? -u : u, s_true + 2.0 * sin(1.7 * k), 1);
+        in.traction_unknown = (uint8_t)(unknown && k == 200);
         assert_int_equal(hstpf_step(&f, &in), HSTPF_OK);
         e = est();
-        if (e.traction_fault && *t_raise < 0) {
+        if (e.traction_fault && (*t_raise < 0 || *t_clear >= 0)) {
+            ++raises;
             *t_raise = k;
             at_raise = e;
         }
@@ -1045,7 +1049,6 @@ static void run_traction_wrong(hstpf_engine_t engine, int flip, int *t_raise, in
             moved_after |= e.model[0].q != at_raise.model[0].q;
         }
         if (*t_raise >= 0 && e.valid) {
-            const double s_true = Y0 + 0.25 * t * t + (k < 142 ? 0.0 : 40.0 * (k - 142));
             const double ep = fabs(e.position_m - s_true), ev = fabs((double)e.speed_mps - v);
             if (ep > 5.0 * e.position_sd_m + 1.0 || ev > 5.0 * (double)e.speed_sd_mps + 0.3) {
                 fail_msg("engine %d, t = %d: position %.2f m off (sd %.2f), speed %.2f m/s off (sd %.2f)", (int)engine, k,
@@ -1053,6 +1056,7 @@ static void run_traction_wrong(hstpf_engine_t engine, int flip, int *t_raise, in
             }
         }
     }
+    assert_true(raises <= 1);
     if (*t_clear >= 0) {
         assert_true(moved_after);
     }
@@ -1063,16 +1067,19 @@ static void test_traction_wrong(void **state)
     int i, raise, clear;
     (void)state;
     for (i = 0; i < 3; ++i) {
-        run_traction_wrong(engines[i], 0, &raise, &clear);
+        run_traction_wrong(engines[i], 0, 0, &raise, &clear);
         assert_int_equal(raise, -1);
-        run_traction_wrong(engines[i], 1, &raise, &clear);
-        print_message("engine %d: traction_fault raised at %d s, cleared at %d s\n", (int)engines[i], raise, clear);
+        run_traction_wrong(engines[i], 1, 0, &raise, &clear);
+        print_message("engine %d: traction_fault raised at %d s, ended at %d s\n", (int)engines[i], raise, clear);
         if (engines[i] == HSTPF_ENGINE_PARTICLE) {
             assert_int_equal(raise, -1);
-        } else {
-            assert_true(raise > 30 && raise <= 60);   /* before the departure */
-            assert_true(clear > 120 && clear <= 180); /* within a minute of being right */
+            continue;
         }
+        assert_true(raise > 30 && raise <= 60); /* before the departure */
+        assert_int_equal(clear, raise + (int)HSTPF_TRAC_RETRY_S);
+        run_traction_wrong(engines[i], 1, 1, &raise, &clear);
+        assert_true(raise > 30 && raise <= 60);
+        assert_int_equal(clear, 200);
     }
 }
 

@@ -66,6 +66,14 @@ extern "C" {
  *  "The fixes must run forwards"). */
 #define HSTPF_REF_PROBATION_S 30.0
 
+/** How long a traction found implausible (hstpf_estimate_t.traction_fault)
+ *  is taken as unknown before it is believed and tested again, s; found
+ *  again within this time after such a retry, twice as long the next time,
+ *  up to 4 times. It also ends on a step whose traction the caller reports
+ *  unknown (its source went away: what comes back may be right), and at
+ *  hstpf_reset(). */
+#define HSTPF_TRAC_RETRY_S 600.0
+
 /** Largest Davis coefficients a train type may have (and an estimate
  *  published as valid): c0 N/kN, c1 N/kN per km/h, c2 N/kN per (km/h)^2. */
 #define HSTPF_C0_MAX 50.0
@@ -326,7 +334,8 @@ typedef struct {
     uint8_t grid_speed_lattice;
     /** 1 (default): test on every fix whether the reported traction
      *  explains the fixes better than no traction would, and take it as
-     *  unknown while it does not (hstpf_estimate_t.traction_fault); 0:
+     *  unknown for HSTPF_TRAC_RETRY_S when it does not
+     *  (hstpf_estimate_t.traction_fault); 0:
      *  always believe it. A 2 x 2 Kalman filter per step. The Kalman and
      *  grid engines under Gaussian process noise (any fix noise); not the
      *  particle engine (its Monte Carlo likelihoods are too low to test
@@ -443,11 +452,12 @@ typedef struct {
      *  some weighted models hold the train at rest, or may have brought it
      *  to rest, and others still move it (its arrival), for at most 10 s. */
     uint8_t standstill;
-    /** 1 while the reported traction explains the fixes worse than no
-     *  traction at all (its sign swapped, a wrong signal; docs/model.md,
-     *  "A traction that cannot be right"): the steps then take it as
-     *  unknown, no weight moves and no type is declared, until it explains
-     *  them better again. 0 with cfg.traction_check off. */
+    /** 1 while the reported traction is taken for implausible: it
+     *  explained the fixes worse than no traction at all (its sign swapped,
+     *  a wrong signal; docs/model.md, "A traction that cannot be right").
+     *  The steps then take it as unknown, no weight moves and no type is
+     *  declared, for HSTPF_TRAC_RETRY_S; then it is believed and tested
+     *  again. 0 with cfg.traction_check off. */
     uint8_t traction_fault;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
@@ -595,9 +605,13 @@ typedef struct {
 typedef struct {
     hstpf_model_t sh;  /* the shadow filter: kx, kp, k0..k2, track_hint */
     double cusum;      /* of the shadow's log-likelihood against the bank's, nats */
-    uint32_t changes;  /* times the fault was raised or cleared */
+    uint32_t changes;  /* times the fault was raised */
     uint8_t fault;     /* the reported traction explains the fixes worse than none */
     uint8_t placed;    /* the shadow holds a state */
+    uint8_t settle;    /* fixes not tested since it was placed */
+    double fault_s;    /* time since the fault was raised */
+    double retry_s;    /* how long this one stands: HSTPF_TRAC_RETRY_S, doubled when found again soon after */
+    double since_retry_s; /* time since the last retry */
 } hstpf_trac_check_t;
 
 /**
