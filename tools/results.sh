@@ -64,6 +64,12 @@ done
 # the traction gap as hstpfd fed it before the twenty-fifth session (the last value), and on the particle engine
 "$mc" --scenario tracgap --seeds "$seeds" --gap-hold | tee "$out/tracgap-hold.txt"
 "$mc" --scenario tracgap --seeds "$seeds" --engine particle | tee "$out/tracgap-particle.txt"
+# a traction present but wrong (its sign swapped; a gain 20 % low), with the traction check and without it
+for s in tracsign gain-20; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"
+done
 fi
 if section offtable; then
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"

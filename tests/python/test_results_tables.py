@@ -248,3 +248,14 @@ def test_swaps_row(tmp_path):
                     "after the change in 128, for a median 219 s, max 1460 s; the new truth declared in 181; "
                     "W(300 km/h) error while a wrong type was declared and valid, max 79.1%\n", rt.swaps)
     assert cells == ["`swap`", "123 of 1700", "128, 219 / 1460 s", "181", "79.1%"]
+
+
+def test_honesty_row(tmp_path):
+    # hstpf-mc's own wording (a journey's total and "standstill published" lines)
+    cells = one_row(tmp_path, "tracsign",
+                    "total: 1700 runs; false declarations 3 (0.2%), 0 from a standstill, 0 outside the pair; ...\n"
+                    "standstill published while the train moved: 1416 steps in 169 runs; valid steps with the speed "
+                    "more than 5 sd and 0.3 m/s off: 6018 in 340 runs; the traction taken for wrong (traction_fault) "
+                    "at 480562 steps in 339 runs, its CUSUM while the traction was believed at most 24.97 nats\n",
+                    rt.honesty)
+    assert cells == ["`tracsign`", "1416 (169)", "6018 (340)", "480562 (339)", "24.97", "3 (0.2%)"]

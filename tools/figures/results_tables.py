@@ -107,6 +107,33 @@ def tracgaps(d: Path) -> str:
     return "\n".join(out)
 
 
+# what is published at the stops and under a traction that is wrong (the
+# journeys' "standstill published" line); -nocheck: cfg.traction_check = 0
+HONESTY = ["stops", "day", "start300", "restart", "tracgap", "swap", "off15", "grade8", "stops-t", "stops-case2",
+           "tracsign", "tracsign-nocheck", "gain-20", "gain-20-nocheck"]
+
+
+def honesty(d: Path) -> str:
+    """Steps published at standstill while the train moved, valid steps whose
+    speed was more than 5 sd off, the traction taken for wrong, and the
+    traction check's margin (hstpf-mc's journeys)."""
+    out = ["| scenario | standstill while the train moved: steps (runs) | valid steps with the speed > 5 sd and "
+           "0.3 m/s off (runs) | traction taken for wrong: steps (runs) | its CUSUM while believed, max [nats] | "
+           "false declarations (runs) |", "|" + "---|" * 6]
+    for s in HONESTY:
+        if not (d / f"{s}.txt").exists():
+            continue
+        h = last(d / f"{s}.txt", "standstill published")
+        t = last(d / f"{s}.txt", "total:")
+        out.append("| `{}` | {} ({}) | {} ({}) | {} ({}) | {} | {} ({}) |".format(
+            s, num(r"moved: (\d+) steps", h), num(r"moved: \d+ steps in (\d+) runs", h),
+            num(r"0.3 m/s off: (\d+)", h), num(r"0.3 m/s off: \d+ in (\d+) runs", h),
+            num(r"at (\d+) steps in", h), num(r"traction_fault\) at \d+ steps in (\d+) runs", h),
+            num(r"at most ([\d.]+) nats", h), num(r"false declarations (\d+)", t),
+            num(r"false declarations \d+ \(([\d.]+%)\)", t)))
+    return "\n".join(out)
+
+
 SWAPS = ["swap", "swap-near"]
 
 
@@ -399,6 +426,8 @@ def main(argv=None) -> int:
         print(tracgaps(d))
         print("\n### A consist that changes at a station\n")
         print(swaps(d))
+        print("\n### At the stops, and under a traction that is wrong\n")
+        print(honesty(d))
         print("\n### Trains not on Table 1\n")
         print(offtable(d))
         if any((d / f"{s}.txt").exists() for s in OFFTABLE_T):
