@@ -458,13 +458,15 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
     }
     if (trac_known) {
-        /* a lone outlier, a lock on probation, and a standstill test
-         * nothing: held models predict the same whatever the traction (no
-         * more than the brake's sign is read), and a train held a few metres
-         * from where it stopped fits the fixes worse than the shadow while
-         * the fixes pull it there (hstpf-mc --scenario stops, DFH3 seed 45:
-         * the CUSUM reached 21 of 25 nats at a stop) */
-        hstpf__trac_check_end(f, &st, f->lost_run != 1u && !f->pr.active && !f->standstill);
+        /* a lone outlier and a lock on probation test nothing. At a
+         * standstill each fix counts for at most 1 nat: a train held a few
+         * metres from where it stopped fits the fixes worse than the shadow
+         * while they pull it there (hstpf-mc --scenario gain5, DFH3 seed 45:
+         * the CUSUM reached 24.8 of 25 nats at a stop; 10.3 now), but a
+         * traction whose sign is swapped holds the models while the train
+         * departs, which only these steps show (not tested at all, tracsign
+         * published 12 % more wrong steps) */
+        hstpf__trac_check_end(f, &st, f->lost_run != 1u && !f->pr.active, f->standstill);
     }
     /* The first such fix after fixes they fitted is taken for an outlier
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at

@@ -45,6 +45,7 @@ uint8_t hstpf__off_what(const hstpf_t *f);
  * HSTPF__TRAC_NATS: with a true traction it reached 14.6 nats at most in
  * 340 runs of `day` (4.9 M steps; hstpf-mc) */
 #define HSTPF__TRAC_CLIP 3.0
+#define HSTPF__TRAC_CLIP_HELD 1.0 /* at a standstill (see bank.c) */
 #define HSTPF__TRAC_NATS 25.0
 #define HSTPF__TRAC_SETTLE 3 /* fixes a newly placed shadow does not test */
 void hstpf__trac_check_reset(hstpf_t *f);
@@ -55,7 +56,7 @@ void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt);
 /* After the bank stepped, before its weights move: the shadow steps on st
  * (the bank's step) without the traction; with test, and a fix, the CUSUM
  * takes this fix. */
-void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *st, int test);
+void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *st, int test, int standstill);
 /* The origin moved by +d. */
 void hstpf__trac_check_shift(hstpf_t *f, double d);
 

@@ -85,14 +85,14 @@ void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt)
     }
 }
 
-void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test)
+void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, int standstill)
 {
     hstpf_trac_check_t *c = &f->tc;
     hstpf__step_t st = *bank_st;
     uint16_t hint = c->sh.track_hint;
     uint8_t held;
     int floored;
-    double ll_sh, r;
+    double ll_sh, r, clip;
     if (!checking(f) || c->fault || !c->placed) {
         return;
     }
@@ -121,7 +121,8 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test)
     }
     /* positive: no traction explains the fix better than the bank with it */
     r = ll_sh - hstpf__bank_loglik(f);
-    r = r > HSTPF__TRAC_CLIP ? HSTPF__TRAC_CLIP : (r < -HSTPF__TRAC_CLIP ? -HSTPF__TRAC_CLIP : r);
+    clip = standstill ? HSTPF__TRAC_CLIP_HELD : HSTPF__TRAC_CLIP;
+    r = r > clip ? clip : (r < -clip ? -clip : r);
     c->cusum = c->cusum + r > 0.0 ? c->cusum + r : 0.0;
     if (c->cusum > HSTPF__TRAC_NATS) {
         /* found again soon after a retry: the fault stands, wait longer
