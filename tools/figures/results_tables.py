@@ -64,6 +64,14 @@ def journeys(d: Path) -> str:
     return "\n".join(out)
 
 
+def present(d: Path, names, *prefixes):
+    """(name, the last line of each prefix) for the scenarios of names whose
+    output d holds, in the order of names."""
+    for s in names:
+        if (d / f"{s}.txt").exists():
+            yield (s, *(last(d / f"{s}.txt", p) for p in prefixes))
+
+
 RESTARTS = ["restart", "restart-t"]
 
 
@@ -73,11 +81,7 @@ def restarts(d: Path) -> str:
     out = ["| scenario | runs restarted | valid again after, median / p90 / max [s] | never | steps valid after it "
            "| max position error at a valid step after it [m] | false declarations (runs) |",
            "|" + "---|" * 7]
-    for s in RESTARTS:
-        if not (d / f"{s}.txt").exists():
-            continue
-        r = last(d / f"{s}.txt", "reference restarted")
-        t = last(d / f"{s}.txt", "total:")
+    for s, r, t in present(d, RESTARTS, "reference restarted", "total:"):
         out.append("| `{}` | {} | {} / {} / {} | {} | {} | {} | {} ({}) |".format(
             s, num(r"in (\d+ of \d+) runs", r), num(r"after a median (\d+) s", r), num(r"p90 (\d+) s", r),
             num(r"max (\d+) s", r), num(r"never in (\d+)", r), num(r"valid at ([\d.]+%)", r),
@@ -96,10 +100,9 @@ def tracgaps(d: Path) -> str:
     out = ["| scenario | what the filter is fed | valid steps > 5 sd off in the gap and 30 s after (runs) | largest speed "
            "error at a valid step [m/s] | standstill while the train moved [steps] | weights' TV across the gap, "
            "median / max |", "|" + "---|" * 6]
-    for s, what in TRACGAPS:
-        if not (d / f"{s}.txt").exists():
-            continue
-        g = last(d / f"{s}.txt", "traction gap")
+    what_of = dict(TRACGAPS)
+    for s, g in present(d, [n for n, _ in TRACGAPS], "traction gap"):
+        what = what_of[s]
         out.append("| `{}` | {} | {} ({}) | {} | {} | {} / {} |".format(
             s, what, num(r"30 s after: (\d+)", g), num(r"30 s after: \d+ in (\d+ of \d+) runs", g),
             num(r"at a valid step ([\d.]+) m/s", g), num(r"train moved: (\d+) steps", g),
@@ -120,11 +123,7 @@ def honesty(d: Path) -> str:
     out = ["| scenario | standstill while the train moved: steps (runs) | valid steps with the speed > 5 sd and "
            "0.3 m/s off (runs) | traction taken for wrong: steps (runs) | its CUSUM while believed, max [nats] | "
            "false declarations (runs) |", "|" + "---|" * 6]
-    for s in HONESTY:
-        if not (d / f"{s}.txt").exists():
-            continue
-        h = last(d / f"{s}.txt", "standstill published")
-        t = last(d / f"{s}.txt", "total:")
+    for s, h, t in present(d, HONESTY, "standstill published", "total:"):
         out.append("| `{}` | {} ({}) | {} ({}) | {} ({}) | {} | {} ({}) |".format(
             s, num(r"moved: (\d+) steps", h), num(r"moved: \d+ steps in (\d+) runs", h),
             num(r"0.3 m/s off: (\d+)", h), num(r"0.3 m/s off: \d+ in (\d+) runs", h),
@@ -143,10 +142,7 @@ def swaps(d: Path) -> str:
     out = ["| scenario | a type declared at the change | the first truth declared after the change: runs, median / "
            "max time after it | the new truth declared | W(300 km/h) error while a wrong type was declared and "
            "valid, max |", "|" + "---|" * 5]
-    for s in SWAPS:
-        if not (d / f"{s}.txt").exists():
-            continue
-        g = last(d / f"{s}.txt", "type changed")
+    for s, g in present(d, SWAPS, "type changed"):
         out.append("| `{}` | {} | {}, {} / {} s | {} | {} |".format(
             s, num(r"declared then in (\d+ of \d+) runs", g), num(r"kept after the change in (\d+)", g),
             num(r"for a median (\d+) s", g), num(r"for a median \d+ s, max (\d+) s", g),
