@@ -65,6 +65,7 @@ static void reset_state(hstpf_t *f)
     f->rf.loglik = 0.0;
     f->rf.held = 0;
     f->rf.floored = 0;
+    f->rf.rest_s = 0.0;
     hstpf__trac_check_reset(f);
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
@@ -77,6 +78,7 @@ static void reset_state(hstpf_t *f)
         memset(m->kx, 0, sizeof m->kx);
         memset(m->kp, 0, sizeof m->kp);
         m->kll = 0.0;
+        m->rest_s = 0.0;
         m->held = 0;
         m->k_placed = 0;
         m->reacquired = 0;

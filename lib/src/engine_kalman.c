@@ -55,6 +55,7 @@ void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         m->kp[2] = c->init_speed_sd * c->init_speed_sd;
     }
     m->kx[1] = m->kx[1] > 0.0 ? m->kx[1] : 0.0;
+    m->rest_s = 0.0;
 }
 
 static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
@@ -97,7 +98,8 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
      * deterministic speed never falls */
     rest = *held ? HSTPF__REST_MOVING
                  : (st->free_run ? (vd < 0.0 ? HSTPF__REST_AT_REST : HSTPF__REST_MOVING)
-                                 : hstpf__kalman_rest(vd, fvv * fvv * pvv, scale * nm[2], sc2 * nm[3] * nm[3], &rs));
+                                 : hstpf__kalman_rest_timed(vd, fvv * fvv * pvv, scale * nm[2], sc2 * nm[3] * nm[3], dt,
+                                                            &m->rest_s, &rs));
     if (*held) {
         /* at rest and nothing can start it: no motion, no process noise */
         ns = s;

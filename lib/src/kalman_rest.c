@@ -44,13 +44,29 @@ int hstpf__kalman_rest(double vd, double pyy, double mu_w, double q_w, hstpf__re
     return HSTPF__REST_MIXED;
 }
 
+int hstpf__kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, double dt, double *rest_s,
+                             hstpf__rest_t *out)
+{
+    const int rest = hstpf__kalman_rest(vd, pyy, mu_w, q_w, out);
+    if (rest != HSTPF__REST_MIXED || (out->p_rest < 0.5 && out->v * out->v > HSTPF__REST_SD2 * out->var)) {
+        *rest_s = 0.0;
+        return rest;
+    }
+    *rest_s += out->p_rest >= 0.5 ? dt : HSTPF__REST_SD_RATE * dt;
+    if (*rest_s >= HSTPF__REST_SETTLE_S) {
+        *rest_s = 0.0;
+        return HSTPF__REST_AT_REST;
+    }
+    return rest;
+}
+
 uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double vd, int free_run, double mu_w, double q_w,
-                                 double acc_var)
+                                 double acc_var, double dt, double *rest_s)
 {
     hstpf__rest_t rs;
     /* with the traction unknown no model holds the train (bank.c) */
     const int rest = free_run ? (vd < 0.0 ? HSTPF__REST_AT_REST : HSTPF__REST_MOVING)
-                              : hstpf__kalman_rest(vd, p[n + 1], mu_w, q_w, &rs);
+                              : hstpf__kalman_rest_timed(vd, p[n + 1], mu_w, q_w, dt, rest_s, &rs);
     int i;
     if (rest == HSTPF__REST_AT_REST) { /* v' = 0 exactly, no speed spread */
         x[1] = 0.0;

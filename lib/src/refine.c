@@ -64,6 +64,7 @@ void hstpf__refine_place(hstpf_t *f)
     }
     r->kp[5 * NZ + 5] = f->cfg.refine_gain_sd * f->cfg.refine_gain_sd;
     r->held = 0;
+    r->rest_s = 0.0;
 }
 
 /* Keep the place of a previous posterior of theta and k (a re-acquisition
@@ -82,6 +83,7 @@ void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double
     r->kp[1] = r->kp[NZ] = psv;
     r->kp[NZ + 1] = pvv;
     r->held = 0;
+    r->rest_s = 0.0;
 }
 
 /* P = F P F' + Q with F the identity but for rows 0 and 1, in place: only
@@ -156,7 +158,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         z[0] += dt * v + st->scale * nm[0];
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
         r->held = hstpf__kalman_rest_speed(z, p, NZ, vd, st->free_run, st->scale * nm[2], sc2 * nm[3] * nm[3],
-                                           st->acc_var);
+                                           st->acc_var, dt, &r->rest_s);
     }
     r->loglik = 0.0;
     if (st->has_y && hstpf__fix_exact(f)) {

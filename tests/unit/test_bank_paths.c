@@ -1204,8 +1204,9 @@ static void test_grid_slow_redraw(void **state)
     assert_float_equal((double)e.speed_mps, 2.0, 0.1);
 }
 
-/* A standing train whose brakes hold against 40 N/kN (a row with c0 = 50:
- * at rest only c0 acts) and a row with no resistance, which that traction
+/* A standing train whose brakes hold against 40 N/kN (a row with c0 = 45:
+ * at rest only c0 acts; c0 = 50, the range's end, let the continuous
+ * hypothesis' theta pass it and the estimate was invalid for that) and a row with no resistance, which that traction
  * sets rolling at 0.37 m/s^2: it leaves the fixes, is redrawn at them with
  * the blended speed, 0, so its speed box starts at rest. The estimate stays
  * at the standing train. */
@@ -1217,7 +1218,7 @@ static void test_grid_standing_redraw(void **state)
     (void)state;
     base_config(&c, HSTPF_ENGINE_GRID, 2);
     rows[0].name = "held";
-    rows[0].c0 = 50.0;
+    rows[0].c0 = 45.0;
     rows[1].name = "free";
     rows[1].c0 = rows[1].c1 = rows[1].c2 = 0.0;
     c.noise_s.sd = 0.01; /* 0.37 m/s^2 is then 37 sd of speed noise a step */

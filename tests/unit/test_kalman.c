@@ -37,6 +37,7 @@ static hstpf_theta_t models[2];
 
 typedef struct {
     double x[2], p[3]; /* mean (s, v), covariance (ss, sv, vv) */
+    double rest_s;     /* time the stop's mixture has looked at rest (docs/model.md) */
 } ekf_t;
 
 static double w_of(const hstpf_theta_t *th, double v)
@@ -99,14 +100,21 @@ static void ekf_predict(ekf_t *k, const hstpf_theta_t *th, double dt, double u, 
         p_rest = 0.5 * erfc(vd / sqrt(2.0 * n[1][1]));
     }
     if (p_rest >= 1.0 - 1e-3) { /* at rest within the step */
+        k->rest_s = 0.0;
         k->x[1] = 0.0;
         k->p[1] = k->p[2] = 0.0;
-    } else if (p_rest >= 1e-9) { /* perhaps */
+    } else if (p_rest >= 1e-9) { /* perhaps; at rest after 2 s with P >= 1/2 (5 s within 1.5 sd of 0) */
         double ev, varv, cyv;
         stop_moments(vd, n[1][1], qv, &ev, &varv, &cyv);
+        k->rest_s = p_rest >= 0.5 ? k->rest_s + dt : (ev * ev <= 2.25 * varv ? k->rest_s + 0.4 * dt : 0.0);
         k->x[1] = ev;
         k->p[1] = n[0][1] / n[1][1] * cyv;
         k->p[2] = varv;
+        if (k->rest_s >= 2.0) {
+            k->rest_s = 0.0;
+            k->x[1] = 0.0;
+            k->p[1] = k->p[2] = 0.0;
+        }
     } else {
         k->x[1] = vd;
         k->p[1] = n[0][1];
@@ -157,7 +165,7 @@ static void test_step(void **state)
 {
     hstpf_config_t c;
     hstpf_estimate_t est;
-    ekf_t k[2];
+    ekf_t k[2] = {{{0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0}, {{0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0}};
     double ll[2], q0;
     int l;
     (void)state;
@@ -216,13 +224,14 @@ static void test_step(void **state)
 /* Braking from 1 +- 1.5 m/s at about 1.9 m/s^2: the train may stop within
  * the step (P = 0.72) or go on. Neither 0 +- 0 m/s (the mean of y is
  * below 0) nor a Gaussian through 0: the moments of the stop's mixture,
- * against the reference's quadrature. Two more such steps leave less than
- * 1e-3 moving: at rest, 0 +- 0 exactly, and held. */
+ * against the reference's quadrature. The next such step leaves 2e-3
+ * moving, and P(at rest) has been over 1/2 for 2 s: at rest, 0 +- 0
+ * exactly, and held. */
 static void test_no_reversal(void **state)
 {
     hstpf_config_t c;
     hstpf_estimate_t est;
-    ekf_t k;
+    ekf_t k = {{0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
     int i;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);
@@ -237,6 +246,7 @@ static void test_no_reversal(void **state)
     k.p[0] = 4.0;
     k.p[1] = 0.0;
     k.p[2] = 2.25;
+    k.rest_s = 0.0;
     ekf_predict(&k, &models[0], 1.0, -200.0, 0.25, 0.04);
     assert_true(k.x[1] > 0.1 && k.p[2] > 0.04); /* the case: neither at rest nor moving */
     (void)ekf_update(&k, 501.0, 4.0);
@@ -247,9 +257,9 @@ static void test_no_reversal(void **state)
     assert_int_equal(filt.m[0].held, 2); /* perhaps at rest: the weights wait */
     assert_true(est.speed_sd_mps > 0.1f);
     assert_int_equal(est.standstill, 0);
-    /* P(moving) 2e-3 after the next step (still perhaps), under 1e-3 after
-     * the one after it */
-    for (i = 0; i < 2; ++i) {
+    /* P(moving) 2e-3 after the next step: at rest, P(at rest) having been
+     * over 1/2 for 2 s */
+    for (i = 0; i < 1; ++i) {
         step(1.0, -200.0, 501.0, 1);
         ekf_predict(&k, &models[0], 1.0, -200.0, 0.25, 0.04);
         (void)ekf_update(&k, 501.0, 4.0);
@@ -270,7 +280,7 @@ static void test_outlier(void **state)
 {
     hstpf_config_t c;
     hstpf_estimate_t est;
-    ekf_t k;
+    ekf_t k = {{0.0, 0.0}, {0.0, 0.0, 0.0}, 0.0};
     double S, zf, inn, z, ll;
     (void)state;
     config(&c, HSTPF_ENGINE_KALMAN);

@@ -588,6 +588,7 @@ typedef struct {
     double kx[2];                         /* Kalman engine: mean (s rel., v) */
     double kp[3];                         /* and covariance (ss, sv, vv) */
     double kll;                           /* grid engine: that filter's last increment */
+    double rest_s;                        /* Kalman: time it has looked at rest (kalman_rest.c) */
 } hstpf_model_t;
 
 /* Private: the continuous-theta hypothesis. */
@@ -596,6 +597,7 @@ typedef struct {
     double kz[HSTPF_REFINE_NZ];                   /* s rel., v, c0, c1, c2, k */
     double kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ]; /* covariance, row-major */
     double logq, loglik, nis;                     /* nis: running mean of z^2 */
+    double rest_s;                                /* as hstpf_model_t's */
     uint16_t track_hint;
     uint8_t held, active, placed;
     uint8_t floored;                              /* this fix beyond its likelihood floor */
