@@ -459,8 +459,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
          * held, a time base that broke); a run of these re-acquires */
         f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
     }
-    if (trac_known) {
-        /* a lone outlier and a lock on probation test nothing. At a
+    {
+        /* a step whose traction is unknown, a lone outlier and a lock on
+         * probation test nothing. At a
          * standstill each fix counts for at most 1 nat: a train held a few
          * metres from where it stopped fits the fixes worse than the shadow
          * while they pull it there (hstpf-mc --scenario gain5, DFH3 seed 45:
@@ -468,7 +469,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
          * traction whose sign is swapped holds the models while the train
          * departs, which only these steps show (not tested at all, tracsign
          * published 12 % more wrong steps) */
-        hstpf__trac_check_end(f, &st, f->lost_run != 1u && !f->pr.active, f->standstill);
+        hstpf__trac_check_end(f, &st, trac_known && f->lost_run != 1u && !f->pr.active, f->standstill);
     }
     /* The first such fix after fixes they fitted is taken for an outlier
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at

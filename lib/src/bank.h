@@ -50,8 +50,8 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 #define HSTPF__TRAC_SETTLE 3 /* fixes a newly placed shadow does not test */
 void hstpf__trac_check_reset(hstpf_t *f);
 /* Before the bank steps: whether the fault stands this step (it ends
- * HSTPF_TRAC_RETRY_S after it was raised, and on a step whose traction is
- * unknown), and the shadow placed if it has none. */
+ * HSTPF_TRAC_RETRY_S after it was raised), and the shadow placed if it has
+ * none. */
 void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt);
 /* After the bank stepped, before its weights move: the shadow steps on st
  * (the bank's step) without the traction; with test, and a fix, the CUSUM

@@ -12,8 +12,8 @@
  * HSTPF_TRAC_RETRY_S, the steps run as if the traction were unknown (the
  * weights wait, the declaration's hold does not run); then it is believed
  * and tested again (found again within that time after a retry: the next
- * wait is twice as long, up to 4 times). Sooner if the caller reports the
- * traction unknown (its source went away: what comes back may be right). Why not a test of the
+ * wait is twice as long, up to 4 times). Steps whose traction the caller
+ * reports unknown test nothing and keep the fault and the evidence. Why not a test of the
  * traction coming right: docs/model.md, "A traction that cannot be
  * right". */
 #include <math.h>
@@ -62,15 +62,16 @@ void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt)
         c->placed = 0;
         return;
     }
-    if (!traction_known) { /* nothing to test; what comes back is believed */
-        c->fault = 0;
-        c->cusum = 0.0;
-        c->placed = 0;
+    c->since_retry_s += dt;
+    c->fault_s += c->fault ? dt : 0.0;
+    if (!traction_known) {
+        /* nothing to test; the fault and the evidence stand (a sender that
+         * reported its traction unknown every 10th step, when such a step
+         * wiped them, hid a swapped sign from the check: a review), and
+         * the shadow, which does not use the traction, steps on */
         return;
     }
-    c->since_retry_s += dt;
     if (c->fault) {
-        c->fault_s += dt;
         if (c->fault_s < c->retry_s) {
             return;
         }

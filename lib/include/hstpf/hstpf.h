@@ -69,9 +69,8 @@ extern "C" {
 /** How long a traction found implausible (hstpf_estimate_t.traction_fault)
  *  is taken as unknown before it is believed and tested again, s; found
  *  again within this time after such a retry, twice as long the next time,
- *  up to 4 times. It also ends on a step whose traction the caller reports
- *  unknown (its source went away: what comes back may be right), and at
- *  hstpf_reset(). */
+ *  up to 4 times; hstpf_reset() ends it. Steps whose traction the caller
+ *  reports unknown count towards the time and keep the fault. */
 #define HSTPF_TRAC_RETRY_S 600.0
 
 /** Largest Davis coefficients a train type may have (and an estimate
