@@ -13,9 +13,9 @@
  * weights wait, the declaration's hold does not run); then it is believed
  * and tested again (found again within that time after a retry: the next
  * wait is twice as long, up to 4 times). Steps whose traction the caller
- * reports unknown test nothing and keep the fault and the evidence. Why not a test of the
- * traction coming right: docs/model.md, "A traction that cannot be
- * right". */
+ * reports unknown test nothing and keep the fault and the evidence. Why
+ * not a test of the traction coming right: docs/model.md, "A traction that
+ * cannot be right". */
 #include <math.h>
 #include <string.h>
 
