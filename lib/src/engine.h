@@ -109,15 +109,14 @@ typedef struct {
  * HSTPF__REST_MIXED: out holds the moments of v' (point mass and the rest
  * together). */
 int hstpf__kalman_rest(double vd, double pyy, double mu_w, double q_w, hstpf__rest_t *out);
-/* The same with the timer (*rest_s, kept by the caller, 0 at placing) */
-int hstpf__kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, double dt, double *rest_s,
-                             hstpf__rest_t *out);
 /* The same on a filter's mean x and n x n covariance p (row-major, the
  * speed at index 1) after the step without the speed noise (y's variance
  * in p[n + 1]): sets the speed's mean, row and column, adds the noise
  * (q_w + acc_var) to a train that moves; returns hstpf_model_t.held. With
  * the traction unknown (free_run) no model holds the train: at rest only
- * if vd < 0. */
+ * if vd < 0. *rest_s is the model's timer (HSTPF__REST_SETTLE_S; kept by
+ * the caller, 0 at placing), dt the step. The Kalman engine's rows and the
+ * continuous hypothesis' EKF both step their speed through it. */
 uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double vd, int free_run, double mu_w, double q_w,
                                  double acc_var, double dt, double *rest_s);
 

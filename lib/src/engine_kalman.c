@@ -88,18 +88,10 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
     const double pss = m->kp[0], psv = m->kp[1], pvv = m->kp[2];
     const double sc2 = scale * scale;
     const double a = accel(f, m, st->xu, s, v);
-    double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v), ns, nv, loglik = 0.0;
-    double qss, qsv, qvv;
-    hstpf__rest_t rs;
-    int rest;
+    const double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v);
+    double ns, nv, loglik = 0.0, qss, qsv, qvv;
     *held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
     *floored = 0;
-    /* with the traction unknown no model holds the train (bank.c): the
-     * deterministic speed never falls */
-    rest = *held ? HSTPF__REST_MOVING
-                 : (st->free_run ? (vd < 0.0 ? HSTPF__REST_AT_REST : HSTPF__REST_MOVING)
-                                 : hstpf__kalman_rest_timed(vd, fvv * fvv * pvv, scale * nm[2], sc2 * nm[3] * nm[3], dt,
-                                                            &m->rest_s, &rs));
     if (*held) {
         /* at rest and nothing can start it: no motion, no process noise */
         ns = s;
@@ -107,30 +99,24 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qss = pss;
         qsv = 0.0;
         qvv = 0.0;
-    } else if (rest == HSTPF__REST_AT_REST) {
-        /* comes to rest within the step: v' = 0 exactly; s' = s + dt v and
-         * v' do not involve W, so for the weights this is standstill too */
-        *held = 1;
-        ns = s + dt * v + scale * nm[0];
-        nv = 0.0;
-        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
-        qsv = 0.0;
-        qvv = 0.0;
-    } else if (rest == HSTPF__REST_MIXED) {
-        /* may come to rest within the step (kalman_rest.c) */
-        *held = rs.p_rest >= HSTPF__REST_EPS ? HSTPF__HELD_STOPPING : HSTPF__HELD_NO;
-        ns = s + dt * v + scale * nm[0];
-        nv = rs.v;
-        qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
-        qsv = rs.kappa * fvv * (psv + dt * pvv);
-        qvv = rs.var;
     } else {
+        /* P = F P F' + Q with F = [1 dt; 0 fvv]; the speed from y = v + T a
+         * by the one rule of kalman_rest.c (at rest within the step: s' =
+         * s + dt v and v' = 0 do not involve W, so for the weights this is
+         * standstill too; perhaps; or moving with its noise) */
+        double x[2], p[4];
         ns = s + dt * v + scale * nm[0];
-        nv = vd + scale * nm[2];
-        /* P = F P F' + Q with F = [1 dt; 0 fvv] */
         qss = pss + 2.0 * dt * psv + dt * dt * pvv + sc2 * nm[1] * nm[1];
-        qsv = fvv * (psv + dt * pvv);
-        qvv = fvv * fvv * pvv + sc2 * nm[3] * nm[3] + st->acc_var;
+        x[0] = ns;
+        x[1] = vd;
+        p[0] = qss;
+        p[1] = p[2] = fvv * (psv + dt * pvv);
+        p[3] = fvv * fvv * pvv;
+        *held = hstpf__kalman_rest_speed(x, p, 2, vd, st->free_run, scale * nm[2], sc2 * nm[3] * nm[3], st->acc_var, dt,
+                                         &m->rest_s);
+        nv = x[1];
+        qsv = p[1];
+        qvv = p[3];
     }
     if (st->has_y && hstpf__fix_exact(f)) {
         hstpf__fix_t fx;

@@ -44,7 +44,9 @@ int hstpf__kalman_rest(double vd, double pyy, double mu_w, double q_w, hstpf__re
     return HSTPF__REST_MIXED;
 }
 
-int hstpf__kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, double dt, double *rest_s,
+/* hstpf__kalman_rest with the timer (*rest_s, kept by the caller, 0 at
+ * placing: engine.h) */
+static int kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, double dt, double *rest_s,
                              hstpf__rest_t *out)
 {
     const int rest = hstpf__kalman_rest(vd, pyy, mu_w, q_w, out);
@@ -66,7 +68,7 @@ uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double vd, int fre
     hstpf__rest_t rs;
     /* with the traction unknown no model holds the train (bank.c) */
     const int rest = free_run ? (vd < 0.0 ? HSTPF__REST_AT_REST : HSTPF__REST_MOVING)
-                              : hstpf__kalman_rest_timed(vd, p[n + 1], mu_w, q_w, dt, rest_s, &rs);
+                              : kalman_rest_timed(vd, p[n + 1], mu_w, q_w, dt, rest_s, &rs);
     int i;
     if (rest == HSTPF__REST_AT_REST) { /* v' = 0 exactly, no speed spread */
         x[1] = 0.0;
