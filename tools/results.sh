@@ -64,6 +64,12 @@ done
 # the traction gap as hstpfd fed it before the twenty-fifth session (the last value), and on the particle engine
 "$mc" --scenario tracgap --seeds "$seeds" --gap-hold | tee "$out/tracgap-hold.txt"
 "$mc" --scenario tracgap --seeds "$seeds" --engine particle | tee "$out/tracgap-particle.txt"
+# a consist coupled or split during a 5-min stop: the library's consist_change_p, and without it
+for s in couple couple-near; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --consist-p 0 | tee "$out/$s-p0.txt"
+done
 # a traction present but wrong (its sign swapped; a gain 20 % low), with the traction check and without it
 for s in tracsign gain-20; do
   echo "== $s"

@@ -106,6 +106,7 @@ static void reset_state(hstpf_t *f)
     f->standstill = 0;
     f->weights_wait = 0;
     f->arrival_s = 0.0;
+    f->stop_s = 0.0;
     f->outlier_run = 0;
     f->lost_run = 0;
     f->outliers = 0;
@@ -258,6 +259,45 @@ static void update_model_weights(hstpf_t *f)
  * one sum of their magnitudes, NaN or infinite if any is, and beyond
  * HSTPF__STATE_MAX when a state ran away while still finite (the blend of
  * a huge double state would publish infinity; fuzz regression). */
+/* The consist may have changed with probability p (p = 1: it did): each
+ * hypothesis' weight becomes (1 - p) q + p x its prior weight (the rows'
+ * (1 - refine_prior_q) / n, the continuous one's refine_prior_q), and the
+ * continuous hypothesis' theta its moments under the same mixture. */
+static void consist_mix(hstpf_t *f, double p)
+{
+    const uint16_t nh = hstpf__n_hyp(f);
+    const double q0 = f->rf.active ? f->cfg.refine_prior_q : 0.0;
+    uint16_t l;
+    for (l = 0; l < nh; ++l) {
+        double *lq = hstpf__logq_of(f, l);
+        const double prior = l < f->cfg.n_models ? (1.0 - q0) / (double)f->cfg.n_models : q0;
+        *lq = log((1.0 - p) * exp(*lq) + p * prior);
+    }
+    if (f->rf.active && f->rf.placed) {
+        hstpf__refine_consist(f, p);
+    }
+}
+
+int32_t hstpf_consist_changed(hstpf_t *f)
+{
+    if (f == NULL) {
+        return HSTPF_E_NULL;
+    }
+    if (f->magic != HSTPF_MAGIC) {
+        return HSTPF_E_INIT;
+    }
+    consist_mix(f, 1.0);
+    f->status = f->declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED;
+    f->declared = -1;
+    f->leader = -1;
+    f->held_s = 0.0;
+    f->decision_time_s = -1.0;
+    f->fit = HSTPF_FIT_UNKNOWN;
+    f->fit_held_s = 0.0;
+    f->stop_s = 0.0;
+    return HSTPF_OK;
+}
+
 static int finite_models(const hstpf_t *f)
 {
     double z = fabs(f->rf.logq);
@@ -452,6 +492,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         const int hold = weights_hold(f, in->dt_s);
         f->standstill = (uint8_t)(hold == 2);
         f->weights_wait = (uint8_t)(hold != 0);
+        f->stop_s += f->standstill ? in->dt_s : 0.0;
     }
     if (has_y) {
         /* every model that carries weight put this fix beyond its floor:
@@ -477,6 +518,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * weight for that step. A second one in a row moves them as usual. */
     weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run;
     if (weigh) {
+        if (f->stop_s >= HSTPF_CONSIST_STOP_S && f->cfg.consist_change_p > 0.0) {
+            consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a stop */
+        }
+        f->stop_s = 0.0;
         update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {

@@ -35,6 +35,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->declare_threshold = 0.99;
     cfg->declare_hold_s = 30.0;
     cfg->withdraw_threshold = 0.5;
+    cfg->consist_change_p = 0.01; /* docs/model.md, "A consist that changes at a station" */
     cfg->max_gap_s = 30.0;
     cfg->gate_m = 1000.0;
     cfg->accel_unknown_sd = 0.5;
@@ -83,6 +84,7 @@ static const range_t ranges[] = {
     ROW(declare_threshold, 0.5, 1, 1.0, 1, HSTPF_E_CONFIG),
     ROW(declare_hold_s, 0.0, 0, 1e6, 0, HSTPF_E_CONFIG),
     ROW(withdraw_threshold, 0.0, 0, 1.0, 1, HSTPF_E_CONFIG),
+    ROW(consist_change_p, 0.0, 0, 0.5, 0, HSTPF_E_CONFIG),
     ROW(max_gap_s, 1e-6, 0, HSTPF_DT_MAX_S, 0, HSTPF_E_CONFIG),
     ROW(gate_m, 0.0, 0, HSTPF_POS_MAX_M, 0, HSTPF_E_CONFIG),
     ROW(accel_unknown_sd, 0.0, 1, 10.0, 0, HSTPF_E_CONFIG),

@@ -67,6 +67,35 @@ void hstpf__refine_place(hstpf_t *f)
     r->rest_s = 0.0;
 }
 
+/* The consist may have changed (p) or not (1 - p): theta's moments under
+ * that mixture of its posterior and Table 1's prior; s, v and k are the
+ * train's, the same either way. The sum of the two components' covariances
+ * stays positive semi-definite: (1 - p) P + p diag(P_sv, P0) + p (1 - p) d d'. */
+void hstpf__refine_consist(hstpf_t *f, double p)
+{
+    hstpf_refine_t *r = &f->rf;
+    double mu[3], cov[9], d[3];
+    int i, j;
+    prior(f, mu, cov);
+    for (i = 0; i < 3; ++i) {
+        d[i] = r->kz[2 + i] - mu[i];
+    }
+    for (i = 0; i < NZ; ++i) {
+        for (j = 0; j < NZ; ++j) {
+            const int ti = i >= 2 && i <= 4, tj = j >= 2 && j <= 4;
+            double *pij = &r->kp[i * NZ + j];
+            if (ti && tj) {
+                *pij = (1.0 - p) * *pij + p * cov[3 * (i - 2) + (j - 2)] + p * (1.0 - p) * d[i - 2] * d[j - 2];
+            } else if (ti || tj) {
+                *pij *= 1.0 - p;
+            }
+        }
+    }
+    for (i = 0; i < 3; ++i) {
+        r->kz[2 + i] -= p * d[i];
+    }
+}
+
 /* Keep the place of a previous posterior of theta and k (a re-acquisition
  * keeps what was learnt about the train) and place only (s, v). */
 void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double psv, double pvv)

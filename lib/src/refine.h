@@ -10,6 +10,9 @@ void hstpf__refine_place(hstpf_t *f);
 
 /* Places (s, v) again, keeping what was learnt of theta and k. */
 void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double psv, double pvv);
+/* Theta's moments when the consist changed at a stop with probability p
+ * (p = 1: Table 1's prior again). */
+void hstpf__refine_consist(hstpf_t *f, double p);
 
 /* One predict/update step; sets rf.loglik, rf.held, rf.nis. */
 void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st);

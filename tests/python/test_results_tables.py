@@ -245,9 +245,10 @@ def test_swaps_row(tmp_path):
     # hstpf-mc's own wording (the swap scenario's line)
     cells = one_row(tmp_path, "swap",
                     "type changed at a stop (row + 8): a type declared then in 123 of 1700 runs; the old type kept "
-                    "after the change in 128, for a median 219 s, max 1460 s; the new truth declared in 181; "
-                    "W(300 km/h) error while a wrong type was declared and valid, max 79.1%\n", rt.swaps)
-    assert cells == ["`swap`", "123 of 1700", "128, 219 / 1460 s", "181", "79.1%"]
+                    "after the change in 128, for a median 219 s, max 1460 s; the new truth declared in 181, a "
+                    "median 275 s after it; W(300 km/h) error while a wrong type was declared and valid, max 79.1%; "
+                    "W(v) error against the new truth at the end (1700 runs) median 9.57% p90 32.72%\n", rt.swaps)
+    assert cells == ["`swap`", "123 of 1700", "128, 219 / 1460 s", "181, 275 s", "79.1%", "9.57% / 32.72%"]
 
 
 def test_honesty_row(tmp_path):

@@ -615,6 +615,108 @@ static void test_weak_hold(void **state)
     run_weak_hold(-50.0, 0.1);
 }
 
+/* A consist may change at a station (hstpf_config_t.consist_change_p): at
+ * the first weighted step after a standstill of HSTPF_CONSIST_STOP_S or
+ * more, Bayes' rule with the prior mixed in, by hand here from the
+ * weights before the step and the step's log-likelihoods:
+ * q_l' = ((1 - p) q_l + p pi_l) exp(ll_l) / sum, then the floor. After a
+ * shorter stop, q_l exp(ll_l) / sum. Then hstpf_consist_changed(): the prior's weights, no
+ * declaration, each model's state kept. */
+static void consist_stop(int dwell_s, double *max_err)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    double lq[4], ll[4];
+    const double p = 0.01, q0 = 0.01;
+    int k, t_stop = -1, checked = 0;
+    uint16_t l;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    c.consist_change_p = p;
+    c.refine_prior_q = q0;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 1000.0, 0.0, 21);
+    for (k = 0; k < 900 && !checked; ++k) {
+        const int depart = t_stop >= 0 && k >= t_stop + dwell_s;
+        const double u = k < 200 ? 30.0 : (t_stop < 0 ? (t.v > 0.0 ? -60.0 : -50.0) : (depart ? 30.0 : -50.0));
+        for (l = 0; l < 3; ++l) {
+            lq[l] = filt.m[l].logq;
+        }
+        lq[3] = filt.rf.logq;
+        step(1.0, u, truth_fix(&t), 1);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (k >= 200 && t.v == 0.0 && t_stop < 0) {
+            t_stop = k;
+        }
+        if (depart && (filt.m[0].logq != lq[0] || filt.rf.logq != lq[3])) {
+            /* the first step whose weights moved after the stop */
+            const int mixed = dwell_s >= (int)HSTPF_CONSIST_STOP_S;
+            double z[4], sum = 0.0;
+            for (l = 0; l < 3; ++l) {
+                ll[l] = (double)filt.m[l].loglik;
+            }
+            ll[3] = filt.rf.loglik;
+            for (l = 0; l < 4; ++l) {
+                const double prior = l < 3 ? (1.0 - q0) / 3.0 : q0;
+                const double q = exp(lq[l]);
+                z[l] = (mixed ? (1.0 - p) * q + p * prior : q) * exp(ll[l]);
+                sum += z[l];
+            }
+            /* then the floor, and normalise again */
+            for (l = 0; l < 4; ++l) {
+                z[l] /= sum;
+                z[l] = z[l] < c.q_floor ? c.q_floor : z[l];
+            }
+            sum = z[0] + z[1] + z[2] + z[3];
+            for (l = 0; l < 4; ++l) {
+                const double got = l < 3 ? filt.m[l].logq : filt.rf.logq;
+                const double d = fabs(got - log(z[l] / sum));
+                *max_err = d > *max_err ? d : *max_err;
+                assert_true(d < 1e-9);
+            }
+            assert_true(filt.stop_s == 0.0);
+            checked = 1;
+        }
+        truth_step(&t, u);
+    }
+    assert_true(t_stop >= 0 && checked);
+}
+
+static void test_consist_change(void **state)
+{
+    hstpf_estimate_t e, after;
+    hstpf_model_t before[3];
+    double err = 0.0;
+    uint16_t l;
+    (void)state;
+    consist_stop(200, &err); /* mixed */
+    consist_stop(120, &err); /* a station stop: not */
+    print_message("largest |log q - Bayes' rule by hand|: %.2e\n", err);
+    /* the train control says it changed: the prior again, the states kept */
+    assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+    memcpy(before, filt.m, sizeof before);
+    assert_int_equal(hstpf_consist_changed(&filt), HSTPF_OK);
+    assert_int_equal(hstpf_estimate(&filt, &after), HSTPF_OK);
+    check_estimate(&after);
+    for (l = 0; l < 3; ++l) {
+        TU_CLOSE(filt.m[l].logq, log(0.99 / 3.0), 1e-12);
+        assert_true(filt.m[l].s_mean == before[l].s_mean && filt.m[l].v_mean == before[l].v_mean);
+        assert_true(filt.m[l].s_var == before[l].s_var && filt.m[l].v_var == before[l].v_var);
+    }
+    TU_CLOSE(filt.rf.logq, log(0.01), 1e-12);
+    assert_int_equal(after.declared, -1);
+    assert_int_equal(after.status, e.declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED);
+    assert_int_equal(after.valid, e.valid);
+    step(1.0, 30.0, e.position_m + 40.0, 1); /* and it runs on */
+    assert_int_equal(hstpf_estimate(&filt, &after), HSTPF_OK);
+    check_estimate(&after);
+    assert_int_equal(hstpf_consist_changed(NULL), HSTPF_E_NULL);
+    filt.magic = 0;
+    assert_int_equal(hstpf_consist_changed(&filt), HSTPF_E_INIT);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -624,7 +726,7 @@ int main(void)
         cmocka_unit_test(test_outage_sd_grows),       cmocka_unit_test(test_declaration_states),
         cmocka_unit_test(test_held_but_moving),       cmocka_unit_test(test_arrival_waits),
         cmocka_unit_test(test_nonfinite_reset),       cmocka_unit_test(test_stop_honest),
-        cmocka_unit_test(test_weak_hold),
+        cmocka_unit_test(test_weak_hold),             cmocka_unit_test(test_consist_change),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -133,20 +133,25 @@ def honesty(d: Path) -> str:
     return "\n".join(out)
 
 
-SWAPS = ["swap", "swap-near"]
+SWAPS = ["swap", "swap-near", "couple", "couple-p0", "couple-near", "couple-near-p0"]
 
 
 def swaps(d: Path) -> str:
-    """A consist that changes at a station (hstpf-mc's swap scenarios): how
-    long the first truth's type stays declared after the change."""
+    """A consist that changes at a station (hstpf-mc's swap and couple
+    scenarios; -p0: with --consist-p 0): how long the first truth's type
+    stays declared after the change, how soon the new one is, and W(v)
+    against the new truth at the end."""
     out = ["| scenario | a type declared at the change | the first truth declared after the change: runs, median / "
-           "max time after it | the new truth declared | W(300 km/h) error while a wrong type was declared and "
-           "valid, max |", "|" + "---|" * 5]
+           "max time after it | the new truth declared: runs, median time after the change | W(300 km/h) error "
+           "while a wrong type was declared and valid, max | W(v) error against the new truth at the end, median / "
+           "p90 |", "|" + "---|" * 6]
     for s, g in present(d, SWAPS, "type changed"):
-        out.append("| `{}` | {} | {}, {} / {} s | {} | {} |".format(
+        out.append("| `{}` | {} | {}, {} / {} s | {}, {} | {} | {} / {} |".format(
             s, num(r"declared then in (\d+ of \d+) runs", g), num(r"kept after the change in (\d+)", g),
             num(r"for a median (\d+) s", g), num(r"for a median \d+ s, max (\d+) s", g),
-            num(r"the new truth declared in (\d+)", g), num(r"declared and valid, max ([\d.]+%)", g)))
+            num(r"the new truth declared in (\d+)", g), num(r"the new truth declared in \d+, a median (\d+ s)", g),
+            num(r"declared and valid, max ([\d.]+%)", g), num(r"at the end \(\d+ runs\) median ([\d.]+%)", g),
+            num(r"at the end \(\d+ runs\) median [\d.]+% p90 ([\d.]+%)", g)))
     return "\n".join(out)
 
 

@@ -100,6 +100,7 @@ typedef struct {
     double swap_old_s;          /* how long after the change the old type stayed declared (-1: it was not) */
     double swap_new_s;          /* when after it the new truth was first declared (-1: never) */
     double swap_w_max;          /* max |W(v) error| at 300 km/h while a wrong type was declared and valid */
+    double swap_w_end;          /* RMS relative W(v) error against the new truth at the end */
 } journey_t;
 
 /* Filter settings under study: the same for every scenario and truth. */
@@ -853,6 +854,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         int kv, in_band = 0, in_curve = 0;
         wt.c0 += w->sc->grade_permille;
         r->w_rms = w_rms_rel(th, &wt);
+        jr->swap_w_end = jr->swap_t >= 0.0 ? w_rms_rel(th, &sim.cfg.truth) : -1.0;
         r->d_table = HUGE_VAL;
         r->near_row = -1;
         for (kv = 0; kv < w->n_models; ++kv) {
@@ -972,6 +974,12 @@ static const hstpf_sim_leg_t line_legs[] = {
     {300.0, 250.0, 120.0}, {250.0, 200.0, 120.0}, {300.0, 250.0, 120.0},
     {200.0, 150.0, 120.0}, {300.0, 200.0, 120.0}};
 static const timetable_t line_tt = {line_legs, 5, 30.0, 0.0};
+/* The line with a consist coupled or split at the second station, where
+ * the train stands 5 min (coupling and its brake test take minutes). */
+static const hstpf_sim_leg_t couple_legs[] = {
+    {300.0, 250.0, 120.0}, {250.0, 200.0, 300.0}, {300.0, 250.0, 120.0},
+    {200.0, 150.0, 120.0}, {300.0, 200.0, 120.0}};
+static const timetable_t couple_tt = {couple_legs, 5, 30.0, 0.0};
 /* A day of 4 h: 60 s at the origin, 12 stations of 2 min, runs of 5 to 20
  * min at 160 to 350 km/h, then a last run to the end of the day. */
 static const hstpf_sim_leg_t day_legs[] = {
@@ -1025,6 +1033,8 @@ static const scenario_t scenarios[] = {
      * CRH3 -> DF11) or the next row (often near), from the first held step after 1000 s */
     {.name = "swap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .swap_after_s = 1000.0, .swap_rows = 8},
     {.name = "swap-near", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .swap_after_s = 1000.0, .swap_rows = 1},
+    {.name = "couple", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2640.0, .tt = &couple_tt, .swap_after_s = 1000.0, .swap_rows = 8},
+    {.name = "couple-near", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2640.0, .tt = &couple_tt, .swap_after_s = 1000.0, .swap_rows = 1},
     /* the traction unit silent for 20-60 s from 16 s before the departure from the second station */
     {.name = "tracgap", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
     {.name = "gain-5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.05},
@@ -1215,9 +1225,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                             q->gap_s, q->gap_bad, q->gap_still, q->gap_ev_max, q->gap_tv);
                 }
                 if (w->sc->swap_after_s > 0.0) {
-                    fprintf(jf, ",\"swap_t\":%.0f,\"swap_declared\":\"%s\",\"swap_old_s\":%.0f,\"swap_new_s\":%.0f,\"swap_w_max\":%.4g",
+                    fprintf(jf, ",\"swap_t\":%.0f,\"swap_declared\":\"%s\",\"swap_old_s\":%.0f,\"swap_new_s\":%.0f,\"swap_w_max\":%.4g,\"swap_w_end\":%.4g",
                             q->swap_t, q->swap_decl >= 0 ? models[q->swap_decl].name : "", q->swap_old_s, q->swap_new_s,
-                            q->swap_w_max);
+                            q->swap_w_max, q->swap_w_end);
                 }
                 fputc('}', jf);
             }
@@ -1265,27 +1275,37 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
         free(tvg);
     }
     if (w->sc->swap_after_s > 0.0) { /* the truth changed type at a stop */
-        double *old = malloc(sizeof(double) * (size_t)all);
-        int nold = 0, ndecl = 0, nnew = 0;
+        double *old = malloc(sizeof(double) * (size_t)all), *tnew = malloc(sizeof(double) * (size_t)all),
+               *wend = malloc(sizeof(double) * (size_t)all);
+        int nold = 0, ndecl = 0, nnew = 0, nw = 0;
         double wmax = 0.0;
-        if (old == NULL) {
+        if (old == NULL || tnew == NULL || wend == NULL) {
             fprintf(stderr, "out of memory\n");
             exit(1);
         }
         for (j = 0; j < all; ++j) {
             const journey_t *q = &w->runs[j].j;
             ndecl += q->swap_decl >= 0;
-            nnew += q->swap_new_s >= 0.0;
+            if (q->swap_new_s >= 0.0) {
+                tnew[nnew++] = q->swap_new_s;
+            }
+            if (q->swap_w_end >= 0.0) {
+                wend[nw++] = q->swap_w_end;
+            }
             if (q->swap_old_s >= 0.0) {
                 old[nold++] = q->swap_old_s;
             }
             wmax = q->swap_w_max > wmax ? q->swap_w_max : wmax;
         }
         printf("type changed at a stop (row + %d): a type declared then in %d of %d runs; the old type kept after the "
-               "change in %d, for a median %.0f s, max %.0f s; the new truth declared in %d; W(300 km/h) error while a "
-               "wrong type was declared and valid, max %.1f%%\n",
-               w->sc->swap_rows, ndecl, all, nold, pct(old, nold, 0.5), pct(old, nold, 1.0), nnew, 100.0 * wmax);
+               "change in %d, for a median %.0f s, max %.0f s; the new truth declared in %d, a median %.0f s after it; "
+               "W(300 km/h) error while a wrong type was declared and valid, max %.1f%%; W(v) error against the new "
+               "truth at the end (%d runs) median %.2f%% p90 %.2f%%\n",
+               w->sc->swap_rows, ndecl, all, nold, pct(old, nold, 0.5), pct(old, nold, 1.0), nnew,
+               pct(tnew, nnew, 0.5), 100.0 * wmax, nw, 100.0 * pct(wend, nw, 0.5), 100.0 * pct(wend, nw, 0.9));
         free(old);
+        free(tnew);
+        free(wend);
     }
     if (w->sc->restart_after_s > 0.0) { /* the reference restarted at a stop: how soon valid again */
         double *rv = malloc(sizeof(double) * (size_t)all);
@@ -1545,6 +1565,7 @@ static void usage_to(FILE *out)
             "  [--resample always|ess] [--ess F]\n"
             "  [--bank paired|independent] [--rough K] [--rough-min-s X] [--rough-min-v X] [--weights marginal|paper] [--q-floor X]\n"
             "  [--hold S] [--threshold Q] [--floor-depth X] [--edge-soft X] [--e-blur SD] [--refine | --no-refine | --refine-any-noise] [--refine-prior Q] [--refine-spread X]\n"
+            "  [--consist-p P]  (cfg.consist_change_p: the consist changed at a stop of 3 min or more with probability P)\n"
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "  [--gap-hold]  (tracgap scenarios: the gap feeds the last traction, as hstpfd did before, not 'unknown')\n"
             "  [--no-traction-check]  (cfg.traction_check = 0: the traction always believed)\n"
@@ -1860,6 +1881,7 @@ int main(int argc, char **argv)
                          {"--rough-min-s", &st.base.rough_min_s, NULL},
                          {"--rough-min-v", &st.base.rough_min_v, NULL},
                          {"--q-floor", &st.base.q_floor, NULL},
+                         {"--consist-p", &st.base.consist_change_p, NULL},
                          {"--hold", &st.base.declare_hold_s, NULL},
                          {"--threshold", &st.base.declare_threshold, NULL},
                          {"--e-blur", &st.base.e_blur_sd, NULL},

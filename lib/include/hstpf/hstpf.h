@@ -66,6 +66,13 @@ extern "C" {
  *  "The fixes must run forwards"). */
 #define HSTPF_REF_PROBATION_S 30.0
 
+/** The shortest standstill at which hstpf_config_t.consist_change_p
+ *  applies, s: coupling or splitting a consist, with its brake test, takes
+ *  minutes. A 2-minute station stop or a signal does not change the train,
+ *  and no weight is mixed there (each mix costs a near-certain leader some
+ *  weight and its declaration up to 30 s: docs/results.md). */
+#define HSTPF_CONSIST_STOP_S 180.0
+
 /** How long a traction found implausible (hstpf_estimate_t.traction_fault)
  *  is taken as unknown before it is believed and tested again, s; found
  *  again within this time after such a retry, twice as long the next time,
@@ -250,6 +257,17 @@ typedef struct {
     /** A declared type whose q falls below this is withdrawn (status
      *  WITHDRAWN, declared -1); [q_floor, declare_threshold] (0.5). */
     double withdraw_threshold;
+    /** Probability that the consist (the train type) changed during a
+     *  standstill of at least HSTPF_CONSIST_STOP_S (coupled or split at a
+     *  station), [0, 0.5] (0.01). At the first weighted step after such a
+     *  stop each hypothesis' weight q becomes (1 - p) q + p x its prior
+     *  weight, and the continuous hypothesis' theta its moments under the
+     *  same mixture with its prior: a new train's row then needs about
+     *  log(1 / (p x prior)) nats (7.4 at 17 rows), not the weight floor's
+     *  20.7, and no type changes while the train runs. 0: the type never
+     *  changes (call hstpf_consist_changed() when the train control knows
+     *  it did). docs/model.md, "A consist that changes at a station". */
+    double consist_change_p;
     /** Longest step the filter predicts across, s: a longer gap between
      *  accepted inputs (an outage, a clock step) drops the lock and the
      *  filter re-acquires from the next fixes, keeping the model weights;
@@ -669,6 +687,7 @@ typedef struct {
     uint8_t standstill;              /* this step's model weights were held */
     uint8_t weights_wait;            /* held or arriving: this step's weights did not move */
     double arrival_s;                /* time the weighted models disagreed on being at rest */
+    double stop_s;                   /* time at standstill since the weights last moved */
     uint8_t ever_locked;
     double pend_y;                   /* that fix, absolute m */
     double pend_age_s;               /* time since it */
@@ -749,6 +768,18 @@ int32_t hstpf_init(hstpf_t *f, size_t f_size, const hstpf_config_t *cfg);
  * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(models).
  */
 int32_t hstpf_reset(hstpf_t *f);
+
+/**
+ * @brief Tells the estimator that the consist changed (coupled or split)
+ * while it kept running: the model weights return to their prior, the
+ * continuous hypothesis' theta to Table 1's prior, and a declared type is
+ * withdrawn (status WITHDRAWN, declared -1; UNDECIDED if none was). The
+ * lock, position and speed are kept: the train is where it was.
+ * Without this call a changed consist is found from the data
+ * (hstpf_config_t.consist_change_p; docs/model.md).
+ * @return HSTPF_OK, HSTPF_E_NULL or HSTPF_E_INIT. Cost O(models).
+ */
+int32_t hstpf_consist_changed(hstpf_t *f);
 
 /**
  * @brief Drops the lock: the filter re-acquires position and speed from the
