@@ -371,6 +371,19 @@ void hstpfd_core_frame(hstpfd_core_t *c, const hstpfd_frame_t *f)
             hstpfd_sched_time(&c->sched, c->t_now);
         }
         break;
+    case HSTPFD_RX_CONSIST:
+        ++c->n.consist;
+        if (r.valid && c->have_topo && r.topo != c->topo) {
+            /* coupled or split: the type is not what the weights say */
+            (void)hstpf_consist_changed(c->filt);
+            ++c->n.consist_changes;
+        }
+        if (r.valid) {
+            c->have_topo = 1;
+            c->topo = r.topo;
+        }
+        hstpfd_sched_time(&c->sched, c->t_now);
+        break;
     case HSTPFD_RX_ERROR: {
         unsigned i;
         ++c->n.error;

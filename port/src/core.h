@@ -36,6 +36,7 @@ typedef struct {
     uint32_t step_ok, step_err[11]; /* step_err[-code], code -1..-10; [0] other */
     uint32_t degeneracy;
     uint32_t trac_implausible; /* times the library found the traction implausible (traction_fault raised) */
+    uint32_t consist, consist_changes; /* Consist frames; changes of its topology counter passed on */
     uint32_t reacquire; /* restarts of the filter (gap or clock step) */
     uint32_t tx_frames, tx_errors, tx_offline, tx_skipped;
     /* filled by the I/O layer */
@@ -77,6 +78,8 @@ typedef struct {
     int64_t est_t_us;      /* timeline time of the published estimate (its step's end) */
     int64_t est_fix_us;    /* the same on the fix clock, as mapped at the step (EstTime) */
     uint8_t have_est_fix;  /* est_fix_us is set: the step had a fix clock */
+    uint8_t have_topo;     /* topo is set: a valid Consist frame was received */
+    uint32_t topo;         /* its topology counter */
     int16_t declared_prev;
     int64_t decision_t;    /* frame time of the step that declared the current type */
     uint32_t floor_prev[HSTPF_MAX_MODELS];

@@ -27,6 +27,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     const hstpfd_config_t *cfg = c->cfg;
     const hstpf_e2e_counts_t *p = hstpf_e2e_rx_counts(&c->rx.pos);
     const hstpf_e2e_counts_t *t = hstpf_e2e_rx_counts(&c->rx.trac);
+    const hstpf_e2e_counts_t *k = hstpf_e2e_rx_counts(&c->rx.topo);
     const hstpfd_sched_counts_t *s = &c->sched.n;
     uint16_t l;
     unsigned i;
@@ -110,11 +111,11 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
         hstpfd__out_num(fp, 0, (double)e->model[l].q, 9);
     }
     fputs("},\"faults\":{", fp);
-    kv(fp, "bad_crc", (unsigned long)(p->bad_crc + t->bad_crc), 1);
-    kv(fp, "wrong_length", (unsigned long)(p->wrong_length + t->wrong_length), 0);
-    kv(fp, "repeated", (unsigned long)(p->repeated + t->repeated), 0);
-    kv(fp, "counter_jump", (unsigned long)(p->jump + t->jump), 0);
-    kv(fp, "lost", (unsigned long)(p->lost + t->lost), 0);
+    kv(fp, "bad_crc", (unsigned long)(p->bad_crc + t->bad_crc + k->bad_crc), 1);
+    kv(fp, "wrong_length", (unsigned long)(p->wrong_length + t->wrong_length + k->wrong_length), 0);
+    kv(fp, "repeated", (unsigned long)(p->repeated + t->repeated + k->repeated), 0);
+    kv(fp, "counter_jump", (unsigned long)(p->jump + t->jump + k->jump), 0);
+    kv(fp, "lost", (unsigned long)(p->lost + t->lost + k->lost), 0);
     kv(fp, "stale_events", (unsigned long)(p->stale + t->stale), 0);
     kv(fp, "position_stale", (unsigned long)s->pos_stale, 0);
     kv(fp, "traction_stale", (unsigned long)s->trac_stale, 0);
@@ -135,6 +136,8 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     e2e_kv(fp, p);
     fputs("},\"traction\":{", fp);
     e2e_kv(fp, t);
+    fputs("},\"consist\":{", fp);
+    e2e_kv(fp, k);
     fputs("}},\"error_classes\":{", fp);
     for (i = 0; i < HSTPFD_ERR_N_CLASSES; ++i) {
         kv(fp, hstpfd__class_names[i], (unsigned long)c->n.err_class[i], i == 0);
@@ -151,6 +154,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "total", (unsigned long)c->n.frames, 1);
     kv(fp, "position", (unsigned long)c->n.position, 0);
     kv(fp, "traction", (unsigned long)c->n.traction, 0);
+    kv(fp, "consist", (unsigned long)c->n.consist, 0);
     kv(fp, "own_outputs", (unsigned long)c->n.output, 0);
     kv(fp, "ticks", (unsigned long)c->n.ticks, 0);
     fputs("},\"scheduler\":{", fp);
@@ -161,6 +165,7 @@ void hstpfd_core_summary(const hstpfd_core_t *c, FILE *fp, const char *source_ki
     kv(fp, "reacquire", (unsigned long)c->n.reacquire, 0);
     kv(fp, "restarts", (unsigned long)s->restarts, 0);
     kv(fp, "degeneracy", (unsigned long)c->n.degeneracy, 0);
+    kv(fp, "consist_changes", (unsigned long)c->n.consist_changes, 0);
     fputs("},\"io\":{", fp);
     kv(fp, "tx_frames", (unsigned long)c->n.tx_frames, 1);
     kv(fp, "tx_errors", (unsigned long)c->n.tx_errors, 0);

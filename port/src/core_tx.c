@@ -45,6 +45,7 @@ static void tx_values(const hstpfd_core_t *c, unsigned i, hstpfd_tx_values_t *v)
     const hstpf_estimate_t *e = &c->est;
     const hstpf_e2e_counts_t *p = hstpf_e2e_rx_counts(&c->rx.pos);
     const hstpf_e2e_counts_t *t = hstpf_e2e_rx_counts(&c->rx.trac);
+    const hstpf_e2e_counts_t *n = hstpf_e2e_rx_counts(&c->rx.topo);
     memset(v, 0, sizeof *v);
     v->have_fix = c->have_fix;
     v->valid = (uint8_t)hstpfd__est_valid(c);
@@ -92,10 +93,12 @@ static void tx_values(const hstpfd_core_t *c, unsigned i, hstpfd_tx_values_t *v)
     v->pos_stale = c->sched.pos_stale;
     v->trac_stale = c->sched.trac_stale;
     v->trac_fault = c->est.traction_fault;
-    v->bad_crc = p->bad_crc + t->bad_crc;
-    v->repeated = p->repeated + t->repeated;
-    v->jump = p->jump + t->jump;
-    v->wrong_length = p->wrong_length + t->wrong_length;
+    /* every input frame refused; staleness only of the two the estimate
+     * runs on (the Consist frame is an event, and a bus may have none) */
+    v->bad_crc = p->bad_crc + t->bad_crc + n->bad_crc;
+    v->repeated = p->repeated + t->repeated + n->repeated;
+    v->jump = p->jump + t->jump + n->jump;
+    v->wrong_length = p->wrong_length + t->wrong_length + n->wrong_length;
     v->stale_events = p->stale + t->stale;
     v->unknown_id = c->n.unknown;
     v->error_frames = c->n.error;

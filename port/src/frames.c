@@ -24,12 +24,21 @@ int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeou
     (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_TRACTION_ID);
     c.max_delta = max_delta;
     c.timeout_ms = trac_timeout_ms;
-    return hstpf_e2e_rx_init(&st->trac, &c) == 0 ? 0 : -1;
+    if (hstpf_e2e_rx_init(&st->trac, &c) != 0) {
+        return -1;
+    }
+    /* the consist frame as the DBC has it: an event, not a stream the
+     * estimate depends on (its staleness is not a fault) */
+    (void)hstpf_frames_e2e_rx_config(&c, HSTPF_FRAME_CONSIST_ID);
+    c.max_delta = max_delta;
+    return hstpf_e2e_rx_init(&st->topo, &c) == 0 ? 0 : -1;
 }
 
 uint32_t hstpfd_input_id(unsigned i)
 {
-    return i == 0 ? HSTPF_FRAME_POSITION_ID : HSTPF_FRAME_TRACTION_ID;
+    static const uint32_t id[HSTPFD_N_INPUTS] = {HSTPF_FRAME_POSITION_ID, HSTPF_FRAME_TRACTION_ID,
+                                                 HSTPF_FRAME_CONSIST_ID};
+    return i < HSTPFD_N_INPUTS ? id[i] : 0u;
 }
 
 void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t now_ms, hstpfd_rx_t *out)
@@ -76,13 +85,25 @@ void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t n
         }
         return;
     }
+    if (f->id == HSTPF_FRAME_CONSIST_ID) {
+        struct hstpf_can_consist_t m;
+        out->kind = HSTPFD_RX_CONSIST;
+        out->e2e = hstpf_e2e_rx_check(&st->topo, f->data, f->len, now_ms);
+        out->accepted = (uint8_t)(hstpf_e2e_accepted(out->e2e) != 0);
+        if (out->accepted && hstpf_can_consist_unpack(&m, f->data, f->len) == 0) {
+            out->topo = m.topo_counter;
+            out->counter = m.e2e_counter;
+            out->valid = (uint8_t)(m.topo_valid == HSTPF_CAN_CONSIST_TOPO_VALID_VALID_CHOICE);
+        }
+        return;
+    }
     out->kind = HSTPFD_RX_OUTPUT;
 }
 
 void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms)
 {
     (void)hstpf_e2e_rx_poll(&st->pos, now_ms);
-    (void)hstpf_e2e_rx_poll(&st->trac, now_ms);
+    (void)hstpf_e2e_rx_poll(&st->trac, now_ms); /* not the consist's: its silence is no fault */
 }
 
 static const uint32_t out_id[HSTPFD_N_OUTPUTS] = {HSTPF_FRAME_EST_STATE_ID,  HSTPF_FRAME_EST_TYPE_ID,

@@ -19,7 +19,8 @@ typedef enum {
     HSTPFD_RX_OUTPUT = 2,   /* one of our own output IDs (another estimator, or an echo) */
     HSTPFD_RX_UNKNOWN = 3,  /* an ID the DBC does not have */
     HSTPFD_RX_ERROR = 4,    /* an error frame */
-    HSTPFD_RX_FORMAT = 5    /* a known ID as extended, remote or CAN FD frame */
+    HSTPFD_RX_FORMAT = 5,   /* a known ID as extended, remote or CAN FD frame */
+    HSTPFD_RX_CONSIST = 6   /* the train control's consist (topology counter) frame */
 } hstpfd_rx_kind_t;
 
 typedef struct {
@@ -31,6 +32,7 @@ typedef struct {
     uint8_t counter;        /* inputs: the E2E alive counter (when accepted) */
     uint8_t has_fix_time;   /* position: the sender dated the fix (FixTimeValid) */
     uint16_t fix_time_ms;   /* position: fix time, ms modulo HSTPFD_FIX_WRAP_MS */
+    uint32_t topo;          /* consist: the topology counter (when valid) */
 } hstpfd_rx_t;
 
 /* The position frame's fix time wraps at this many ms. */
@@ -38,7 +40,7 @@ typedef struct {
 
 /* Receiver state: one E2E checker per input stream. */
 typedef struct {
-    hstpf_e2e_rx_t pos, trac;
+    hstpf_e2e_rx_t pos, trac, topo;
 } hstpfd_rx_state_t;
 
 
@@ -46,11 +48,11 @@ typedef struct {
 int hstpfd_rx_init(hstpfd_rx_state_t *st, uint8_t max_delta, uint32_t pos_timeout_ms, uint32_t trac_timeout_ms);
 /* Classifies, E2E-checks and decodes one frame received at now_ms. */
 void hstpfd_rx_decode(hstpfd_rx_state_t *st, const hstpfd_frame_t *f, uint32_t now_ms, hstpfd_rx_t *out);
-/* Stale supervision of both inputs at now_ms. */
+/* Stale supervision of the position and traction inputs at now_ms. */
 void hstpfd_rx_poll(hstpfd_rx_state_t *st, uint32_t now_ms);
 
-/* The two input IDs (for kernel filters). */
-#define HSTPFD_N_INPUTS 2
+/* The input IDs: position, traction, consist (for kernel filters). */
+#define HSTPFD_N_INPUTS 3
 uint32_t hstpfd_input_id(unsigned i);
 
 /* EstBand: the sd of W(v) at V = k x 87.5 km/h, k = 0..4 (docs/can.md). */

@@ -89,6 +89,23 @@ static void traction(double valid, double force)
            hstpf_can_traction_tract_force_decode(m.tract_force));
 }
 
+static void consist(double valid, double counter)
+{
+    struct hstpf_can_consist_t m;
+    uint8_t f[8];
+    hstpf_can_consist_init(&m);
+    m.topo_valid = hstpf_frames_consist_topo_valid_raw(valid);
+    m.topo_counter = hstpf_frames_consist_topo_counter_raw(counter);
+    hstpf_can_consist_pack(f, &m, 8);
+    hstpf_e2e_protect(tx_for(HSTPF_FRAME_CONSIST_ID), f, 8);
+    hstpf_can_consist_unpack(&m, f, 8);
+    head("Consist", HSTPF_FRAME_CONSIST_ID, f);
+    printf("\"in\":{\"TopoValid\":%.17g,\"TopoCounter\":%.17g},", valid, counter);
+    printf("\"out\":{\"E2eCrc\":%u,\"E2eCounter\":%u,\"TopoValid\":%.17g,\"TopoCounter\":%.17g}}\n", m.e2e_crc,
+           m.e2e_counter, hstpf_can_consist_topo_valid_decode(m.topo_valid),
+           hstpf_can_consist_topo_counter_decode(m.topo_counter));
+}
+
 static void est_state(double valid, double fault, double pos, double speed)
 {
     struct hstpf_can_est_state_t m;
@@ -303,6 +320,9 @@ static void encode_set(void)
     traction(1, -412.07);
     traction(0, -83886.08);
     traction(1, 83886.07);
+    consist(1, 0.0);
+    consist(1, 4294967295.0);
+    consist(0, 17.0);
     est_state(0, 0, 0.0, 0.0);
     est_state(1, 0, 1234.567, 97.22);
     est_state(1, 0, 350123.456, -0.37);
@@ -400,6 +420,13 @@ static int decode_line(const char *line)
         hstpf_can_traction_unpack(&m, f, n);
         printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TractValid\":%u,\"TractForce\":%.17g", m.e2e_crc, m.e2e_counter,
                m.tract_valid, hstpf_can_traction_tract_force_decode(m.tract_force));
+        break;
+    }
+    case HSTPF_FRAME_CONSIST_ID: {
+        struct hstpf_can_consist_t m;
+        hstpf_can_consist_unpack(&m, f, n);
+        printf("\"E2eCrc\":%u,\"E2eCounter\":%u,\"TopoValid\":%u,\"TopoCounter\":%lu", m.e2e_crc, m.e2e_counter,
+               m.topo_valid, (unsigned long)m.topo_counter);
         break;
     }
     case HSTPF_FRAME_EST_STATE_ID: {

@@ -16,7 +16,7 @@ static void test_frame_table(void **state)
 {
     size_t i, j;
     (void)state;
-    assert_int_equal(HSTPF_FRAMES_COUNT, 10);
+    assert_int_equal(HSTPF_FRAMES_COUNT, 11);
     for (i = 0; i < HSTPF_FRAMES_COUNT; i++) {
         assert_true(hstpf_frames[i].can_id <= 0x7FFu); /* 11-bit */
         assert_int_equal(hstpf_frames[i].length, 8);
@@ -32,6 +32,8 @@ static void test_frame_table(void **state)
     assert_int_equal(HSTPF_FRAME_POSITION_ID, HSTPF_CAN_POSITION_FRAME_ID);
     assert_int_equal(HSTPF_FRAME_EST_THETA_CYCLE_MS, HSTPF_CAN_EST_THETA_CYCLE_TIME_MS);
     assert_string_equal(hstpf_frame_find(HSTPF_FRAME_TRACTION_ID)->name, "Traction");
+    assert_string_equal(hstpf_frame_find(HSTPF_FRAME_CONSIST_ID)->name, "Consist");
+    assert_int_equal(HSTPF_FRAME_CONSIST_ID, 0x102u);
 }
 
 static void test_raw_saturation_and_rounding(void **state)

@@ -59,6 +59,7 @@ def test_c_decodes_python_frames(codec_dump, tmp_path):
     values = [
         ("Position", {"PosValid": 1, "PosQuality": 2, "Position": -1.234}),
         ("Traction", {"TractValid": 1, "TractForce": -4321.09}),
+        ("Consist", {"TopoValid": 1, "TopoCounter": 4294967295}),
         ("EstState", {"EstValid": 1, "EstPosition": 123456.78, "EstSpeed": 88.88}),
         ("EstType", {"TypeStatus": 1, "FitStatus": 1, "DeclaredType": 2, "DeclaredWeight": 0.9876, "LeaderType": 2,
                      "LeaderWeight": 0.9876}),

@@ -132,3 +132,51 @@ def test_traction_sign_swapped(root, tmp_path):
     bits = [FrameCodec().decode(hid, bytes(m.data), check=False)[1]["TractImplausible"]
             for m in read_log(str(out)) if m.arbitration_id == hid]
     assert bits and bits[-1] == 1 and bits[0] == 0
+
+
+def test_consist_frame_coupling(root, tmp_path):
+    """The train control's Consist frame: a change of its topology counter
+    withdraws the declared type at once and puts the weights back to the
+    prior (hstpf_consist_changed()), the lock kept; the first valid value
+    and frames refused by E2E change nothing."""
+    exe = _hstpfd(root)
+    log = tmp_path / "run.log"
+    # CRH3 until the line's second station (at rest from about 902 s), DF11 from there
+    assert simulate.main(["--profile", "line", "--duration", "1500", "--seed", "3", "--couple-at", "800:DF11",
+                          "-o", str(log), "--json", str(tmp_path / "sim.json")]) == 0
+    sim = json.loads((tmp_path / "sim.json").read_text())
+    t_c = sim["couple_t"]
+    assert sim["couple_type"] == "DF11" and 850 < t_c < 950
+
+    def run(path, name):
+        subprocess.run([str(exe), "--log", str(path), "--models", "CRH3,DF11,SS8", "--noise", "case1", "--out",
+                        str(tmp_path / f"{name}.jsonl"), "--summary", str(tmp_path / f"{name}.json")],
+                       check=True, capture_output=True)
+        steps = [json.loads(ln) for ln in (tmp_path / f"{name}.jsonl").read_text().splitlines()]
+        return steps, json.loads((tmp_path / f"{name}.json").read_text())
+
+    steps, summary = run(log, "told")
+    assert summary["frames"]["consist"] == 1501 and summary["scheduler"]["consist_changes"] == 1
+    before = [s for s in steps if 600 <= s["t"] < t_c]
+    assert before and all(s["declared"] == "CRH3" and s["valid"] for s in before)
+    first = next(s for s in steps if s["t"] > t_c)  # at t_c the position frame comes first
+    assert first["declared"] is None and first["status"] == "withdrawn" and first["valid"]
+    assert first["q"] == pytest.approx([0.99 / 3] * 3, abs=1e-6)  # the prior (refine_prior_q 0.01)
+    assert all(s["declared"] != "CRH3" for s in steps if s["t"] > t_c)
+    assert max(range(3), key=lambda i: steps[-1]["q"][i]) == 1  # DF11 leads by the end
+
+    # the same log with the changed counter's frames corrupted (CRC): refused, nothing changes
+    cid = FrameCodec().message("Consist").frame_id
+    from hstpf_tools.logio import message
+    bad = []
+    for m in read_log(str(log)):
+        if m.arbitration_id == cid and m.timestamp >= t_c:
+            d = bytearray(m.data)
+            d[0] ^= 0xFF
+            m = message(m.timestamp, cid, bytes(d))
+        bad.append(m)
+    write_log(str(tmp_path / "bad.log"), bad)
+    steps, summary = run(tmp_path / "bad.log", "refused")
+    assert summary["scheduler"]["consist_changes"] == 0
+    assert summary["e2e"]["consist"]["bad_crc"] == summary["faults"]["bad_crc"] == 1501 - t_c
+    assert next(s for s in steps if s["t"] > t_c)["declared"] == "CRH3"

@@ -138,3 +138,19 @@ def input_frames(codec: FrameCodec, t0: float, times, positions, forces_kn, chan
         fid, d = codec.encode("Traction", {"TractValid": tv, "TractForce": f if tv else 0.0})
         out.append(message(t0 + t, fid, d, channel))
     return out
+
+
+def consist_frames(codec: FrameCodec, t0: float, duration_s: float, change_t=None, channel: str = "vcan0",
+                   period_s: float = 1.0) -> List[can.Message]:
+    """The train control's Consist frame every period_s over [0, duration_s],
+    E2E protected: topology counter 1, then 2 from change_t (None: no
+    change)."""
+    out = []
+    k = 0
+    while k * period_s <= duration_s + 1e-9:
+        t = k * period_s
+        topo = 2 if change_t is not None and t >= change_t else 1
+        fid, d = codec.encode("Consist", {"TopoValid": 1, "TopoCounter": topo})
+        out.append(message(t0 + t, fid, d, channel))
+        k += 1
+    return out

@@ -15,7 +15,7 @@ import bisect
 import csv
 import math
 from dataclasses import dataclass
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -209,6 +209,8 @@ class Run:
     phase: List[str]
     theta: Theta
     dt: float
+    change_t: Optional[float] = None  # when the consist changed to change_theta (None: it did not)
+    change_theta: Optional[Theta] = None
 
 
 def simulate(
@@ -220,6 +222,7 @@ def simulate(
     rng: Optional[np.random.Generator] = None,
     track: Optional[Track] = None,
     gamma: float = 0.06,
+    change: Optional[Tuple[float, Theta]] = None,
 ) -> Run:
     """Runs the model from rest at s = 0 for duration_s (n = round(duration/T) steps).
 
@@ -230,6 +233,10 @@ def simulate(
     u = a_profile / xi + W(v) + g(s) with the current true speed and
     position; coasting is u = 0; a stop reports the holding brake
     (HOLD_BRAKE), which brings the train to rest and holds it there.
+
+    change = (T, theta2): the consist is coupled or split at the first step
+    from T at which the train is held at rest; from there its resistance is
+    theta2's (Run.change_t says when).
     """
     if dt <= 0 or duration_s <= 0:
         raise ValueError("duration and step must be > 0")
@@ -247,6 +254,7 @@ def simulate(
     g = np.zeros(n + 1)
     names = []
     W = theta.resistance
+    theta0, change_t = theta, None
     pi, p_start = 0, 0.0  # phase index, start time
     s_nom = v_nom = 0.0  # the noise-free nominal train that drives phase changes
 
@@ -296,13 +304,16 @@ def simulate(
             v_new = 0.0
         s_nom, v_nom = s_nom + dt * v_nom, (0.0 if kind == "stop" else v_new)
         # true train
+        if change is not None and change_t is None and t[k] >= change[0] and held(theta, v[k], u[k], g[k]):
+            theta, change_t = change[1], float(t[k])
+            W = theta.resistance
         if held(theta, v[k], u[k], g[k]):
             s[k + 1], v[k + 1] = s[k], 0.0
         else:
             acc = k_xi * (u[k] - W(v[k]) - g[k])
             s[k + 1] = s[k] + dt * v[k] + ws[k]
             v[k + 1] = max(0.0, v[k] + dt * acc + wv[k])
-    return Run(t, s, v, u, g, names, theta, dt)
+    return Run(t, s, v, u, g, names, theta0, dt, change_t, theta if change_t is not None else None)
 
 
 def sample_frames(run: Run, period_s: float, e_noise: Noise, rng: np.random.Generator,

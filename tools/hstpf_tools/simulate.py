@@ -9,7 +9,7 @@ import numpy as np
 
 from . import cli, model
 from .frames import FrameCodec, TABLE1
-from .logio import input_frames
+from .logio import consist_frames, input_frames
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -40,6 +40,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="from simulation time T on, positions (frames and truth) count from where the train "
                    "is at T: the positioning unit starts a new run from 0, as at a terminus (a time in a dwell) "
                    "or where a line's kilometrage changes")
+    p.add_argument("--couple-at", metavar="T:TYPE",
+                   help="the consist is coupled or split at the first stop from simulation time T: from there the "
+                   "train runs with TYPE's resistance (a Table 1 name, or c0,c1,c2), and the log carries the train "
+                   "control's Consist frame once a second, its topology counter 1, then 2 from the change")
+    p.add_argument("--couple-silent", action="store_true",
+                   help="with --couple-at: no Consist frames (the estimator must find the change from the data)")
     p.add_argument("--seed", type=int, default=1, help="seed of the simulation's own numpy Generator (1)")
     p.add_argument("--mass-t", type=float, default=500.0, help="train mass for the total force in the traction frame, t (500)")
     p.add_argument("--gamma", type=float, default=0.06, help="rotating-mass factor (0.06)")
@@ -74,6 +80,8 @@ def write_truth(path, run: model.Run, mass_t: float, identity=("", "", "")) -> N
     w.writerow(["time_s", "position_m", "speed_mps", "traction_nkn", "force_kn", "track_nkn", "phase", "c0", "c1", "c2",
                 "type", "seed", "noise", "profile"])
     for k in range(len(run.t)):
+        if run.change_t is not None and run.t[k] >= run.change_t:
+            th = run.change_theta  # the consist changed (--couple-at)
         w.writerow([
             f"{run.t[k]:.6f}", f"{run.s[k]:.6f}", f"{run.v[k]:.6f}", f"{run.u[k]:.6f}",
             f"{model.force_kn(run.u[k], mass_t):.6f}", f"{run.g[k]:.6f}", run.phase[k],
@@ -92,6 +100,16 @@ def _main(argv) -> int:
             raise ValueError("--frame-period, --mass-t, --dt and --duration must be > 0")
         if a.restart_at is not None and not 0 < a.restart_at <= a.duration:
             raise ValueError("--restart-at must lie in (0, --duration]")
+        change = None
+        if a.couple_at:
+            t_s, _, kind = a.couple_at.partition(":")
+            t_c = float(t_s)
+            if not kind or not 0 <= t_c <= a.duration:
+                raise ValueError("--couple-at wants T:TYPE with T in [0, --duration]")
+            change = (t_c, model.theta_for(None, [float(x) for x in kind.split(",")]) if "," in kind
+                      else model.theta_for(kind))
+        elif a.couple_silent:
+            raise ValueError("--couple-silent needs --couple-at")
     except (KeyError, ValueError) as exc:
         raise cli.CliError(cli.EXIT_USAGE, str(exc).strip("'\"")) from exc
     if a.out == "-" and not a.truth:
@@ -110,13 +128,16 @@ def _main(argv) -> int:
     # Separate streams: the trajectory does not change with the frame rate.
     ss = np.random.SeedSequence(a.seed)
     rng_proc, rng_meas = (np.random.default_rng(s) for s in ss.spawn(2))
-    run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma)
+    run = model.simulate(theta, a.profile, a.duration, a.dt, (ws, wv, e), rng_proc, track, a.gamma, change)
     tf, y, u = model.sample_frames(run, a.frame_period, e, rng_meas, a.traction_noise_sd)
     if a.restart_at is not None:  # a new run from 0 where the train is at T: the reference moves, not the train
         s_at = float(np.interp(a.restart_at, run.t, run.s))
         y = np.where(tf >= a.restart_at, y - s_at, y)
         run.s = np.where(run.t >= a.restart_at, run.s - s_at, run.s)
     msgs = input_frames(codec, a.t0, tf, y, model.force_kn(u, a.mass_t), a.channel, fix_time=not a.no_fix_time)
+    if change is not None and not a.couple_silent:
+        msgs = sorted(msgs + consist_frames(codec, a.t0, a.duration, run.change_t, a.channel),
+                      key=lambda m: m.timestamp)  # stable: at a shared time the inputs stay first
     n = cli.save_log(a.out, msgs, a.channel)
     truth = a.truth or str(Path(a.out).with_name(Path(a.out).stem + "_truth.csv"))
     noise = a.noise + "".join(f" {k}={v}" for k, v in (("ws", a.ws), ("wv", a.wv), ("e", a.e_noise)) if v)
@@ -125,6 +146,9 @@ def _main(argv) -> int:
         "log": a.out, "truth": truth, "frames": n, "steps": len(run.t) - 1, "type": theta.name,
         "theta": [theta.c0, theta.c1, theta.c2], "profile": a.profile, "noise": noise, "seed": a.seed,
         "final_position_m": round(float(run.s[-1]), 3), "final_speed_mps": round(float(run.v[-1]), 3),
+        **({"couple_t": run.change_t, "couple_type": run.change_theta.name if run.change_theta else None,
+            "couple_theta": ([run.change_theta.c0, run.change_theta.c1, run.change_theta.c2]
+                             if run.change_theta else None)} if change is not None else {}),
     }, a.json, stdout_taken="-" in (a.out, truth))
     return cli.EXIT_OK
 

@@ -511,6 +511,141 @@ bool hstpf_can_traction_tract_force_is_in_phys_range(double value)
     return ((value >= -83886.08) && (value <= 83886.07));
 }
 
+int hstpf_can_consist_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_consist_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    memset(&dst_p[0], 0, 8);
+
+    dst_p[0] |= pack_left_shift_u8(src_p->e2e_crc, 0u, 0xffu);
+    dst_p[1] |= pack_left_shift_u8(src_p->e2e_counter, 0u, 0x0fu);
+    dst_p[1] |= pack_left_shift_u8(src_p->topo_valid, 4u, 0x10u);
+    dst_p[2] |= pack_left_shift_u32(src_p->topo_counter, 0u, 0xffu);
+    dst_p[3] |= pack_right_shift_u32(src_p->topo_counter, 8u, 0xffu);
+    dst_p[4] |= pack_right_shift_u32(src_p->topo_counter, 16u, 0xffu);
+    dst_p[5] |= pack_right_shift_u32(src_p->topo_counter, 24u, 0xffu);
+
+    return (8);
+}
+
+int hstpf_can_consist_unpack(
+    struct hstpf_can_consist_t *dst_p,
+    const uint8_t *src_p,
+    size_t size)
+{
+    if (size < 8u) {
+        return (-EINVAL);
+    }
+
+    dst_p->e2e_crc = unpack_right_shift_u8(src_p[0], 0u, 0xffu);
+    dst_p->e2e_counter = unpack_right_shift_u8(src_p[1], 0u, 0x0fu);
+    dst_p->topo_valid = unpack_right_shift_u8(src_p[1], 4u, 0x10u);
+    dst_p->topo_counter = unpack_right_shift_u32(src_p[2], 0u, 0xffu);
+    dst_p->topo_counter |= unpack_left_shift_u32(src_p[3], 8u, 0xffu);
+    dst_p->topo_counter |= unpack_left_shift_u32(src_p[4], 16u, 0xffu);
+    dst_p->topo_counter |= unpack_left_shift_u32(src_p[5], 24u, 0xffu);
+
+    return (0);
+}
+
+int hstpf_can_consist_init(struct hstpf_can_consist_t *msg_p)
+{
+    if (msg_p == NULL) return -1;
+
+    memset(msg_p, 0, sizeof(struct hstpf_can_consist_t));
+
+    return 0;
+}
+
+uint8_t hstpf_can_consist_e2e_crc_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_consist_e2e_crc_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_consist_e2e_crc_is_in_range(uint8_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_consist_e2e_crc_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 255.0));
+}
+
+uint8_t hstpf_can_consist_e2e_counter_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_consist_e2e_counter_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_consist_e2e_counter_is_in_range(uint8_t value)
+{
+    return (value <= 14u);
+}
+
+bool hstpf_can_consist_e2e_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 14.0));
+}
+
+uint8_t hstpf_can_consist_topo_valid_encode(double value)
+{
+    return (uint8_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_consist_topo_valid_decode(uint8_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_consist_topo_valid_is_in_range(uint8_t value)
+{
+    return (value <= 1u);
+}
+
+bool hstpf_can_consist_topo_valid_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 1.0));
+}
+
+uint32_t hstpf_can_consist_topo_counter_encode(double value)
+{
+    return (uint32_t)(cantools_unsigned_from_double(round(value)));
+}
+
+double hstpf_can_consist_topo_counter_decode(uint32_t value)
+{
+    return ((double)value);
+}
+
+bool hstpf_can_consist_topo_counter_is_in_range(uint32_t value)
+{
+    (void)value;
+
+    return (true);
+}
+
+bool hstpf_can_consist_topo_counter_is_in_phys_range(double value)
+{
+    return ((value >= 0.0) && (value <= 4294967295.0));
+}
+
 int hstpf_can_est_state_pack(
     uint8_t *dst_p,
     const struct hstpf_can_est_state_t *src_p,

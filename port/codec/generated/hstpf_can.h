@@ -47,6 +47,7 @@ extern "C" {
 /* Frame ids. */
 #define HSTPF_CAN_POSITION_FRAME_ID (0x100u)
 #define HSTPF_CAN_TRACTION_FRAME_ID (0x101u)
+#define HSTPF_CAN_CONSIST_FRAME_ID (0x102u)
 #define HSTPF_CAN_EST_STATE_FRAME_ID (0x200u)
 #define HSTPF_CAN_EST_QUALITY_FRAME_ID (0x201u)
 #define HSTPF_CAN_EST_TYPE_FRAME_ID (0x210u)
@@ -59,6 +60,7 @@ extern "C" {
 /* Frame lengths in bytes. */
 #define HSTPF_CAN_POSITION_LENGTH (8u)
 #define HSTPF_CAN_TRACTION_LENGTH (8u)
+#define HSTPF_CAN_CONSIST_LENGTH (8u)
 #define HSTPF_CAN_EST_STATE_LENGTH (8u)
 #define HSTPF_CAN_EST_QUALITY_LENGTH (8u)
 #define HSTPF_CAN_EST_TYPE_LENGTH (8u)
@@ -71,6 +73,7 @@ extern "C" {
 /* Extended or standard frame types. */
 #define HSTPF_CAN_POSITION_IS_EXTENDED (0)
 #define HSTPF_CAN_TRACTION_IS_EXTENDED (0)
+#define HSTPF_CAN_CONSIST_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_STATE_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_QUALITY_IS_EXTENDED (0)
 #define HSTPF_CAN_EST_TYPE_IS_EXTENDED (0)
@@ -83,6 +86,7 @@ extern "C" {
 /* Frame cycle times in milliseconds. */
 #define HSTPF_CAN_POSITION_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_TRACTION_CYCLE_TIME_MS (100u)
+#define HSTPF_CAN_CONSIST_CYCLE_TIME_MS (1000u)
 #define HSTPF_CAN_EST_STATE_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_EST_QUALITY_CYCLE_TIME_MS (100u)
 #define HSTPF_CAN_EST_TYPE_CYCLE_TIME_MS (1000u)
@@ -106,6 +110,9 @@ extern "C" {
 
 #define HSTPF_CAN_TRACTION_TRACT_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_TRACTION_TRACT_VALID_VALID_CHOICE (1u)
+
+#define HSTPF_CAN_CONSIST_TOPO_VALID_INVALID_CHOICE (0u)
+#define HSTPF_CAN_CONSIST_TOPO_VALID_VALID_CHOICE (1u)
 
 #define HSTPF_CAN_EST_STATE_EST_VALID_INVALID_CHOICE (0u)
 #define HSTPF_CAN_EST_STATE_EST_VALID_VALID_CHOICE (1u)
@@ -187,6 +194,7 @@ extern "C" {
 /* Frame Names. */
 #define HSTPF_CAN_POSITION_NAME "Position"
 #define HSTPF_CAN_TRACTION_NAME "Traction"
+#define HSTPF_CAN_CONSIST_NAME "Consist"
 #define HSTPF_CAN_EST_STATE_NAME "EstState"
 #define HSTPF_CAN_EST_QUALITY_NAME "EstQuality"
 #define HSTPF_CAN_EST_TYPE_NAME "EstType"
@@ -208,6 +216,10 @@ extern "C" {
 #define HSTPF_CAN_TRACTION_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_TRACTION_TRACT_VALID_NAME "TractValid"
 #define HSTPF_CAN_TRACTION_TRACT_FORCE_NAME "TractForce"
+#define HSTPF_CAN_CONSIST_E2E_CRC_NAME "E2eCrc"
+#define HSTPF_CAN_CONSIST_E2E_COUNTER_NAME "E2eCounter"
+#define HSTPF_CAN_CONSIST_TOPO_VALID_NAME "TopoValid"
+#define HSTPF_CAN_CONSIST_TOPO_COUNTER_NAME "TopoCounter"
 #define HSTPF_CAN_EST_STATE_E2E_CRC_NAME "E2eCrc"
 #define HSTPF_CAN_EST_STATE_E2E_COUNTER_NAME "E2eCounter"
 #define HSTPF_CAN_EST_STATE_EST_VALID_NAME "EstValid"
@@ -382,6 +394,47 @@ struct hstpf_can_traction_t {
      * Offset: 0
      */
     int32_t tract_force;
+};
+
+/**
+ * Signals in message Consist.
+ *
+ * The train's composition as the train control knows it. Cycle 1000 ms.
+ *
+ * All signal values are as on the CAN bus.
+ */
+struct hstpf_can_consist_t {
+    /**
+     * Range: 0..255 (0..255 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_crc;
+
+    /**
+     * Range: 0..14 (0..14 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t e2e_counter;
+
+    /**
+     * 1: TopoCounter holds the current composition's counter.
+     *
+     * Range: 0..1 (0..1 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint8_t topo_valid;
+
+    /**
+     * Changes whenever the consist is coupled or split (e.g. the train inauguration's topology counter, IEC 61375-2-5 etbTopoCnt); its value means nothing else. hstpfd takes the first valid value as the current consist and, whenever a valid value differs from the last one, tells the estimator the consist changed (hstpf_consist_changed(): the type weights back to the prior, the declaration withdrawn, the lock kept).
+     *
+     * Range: 0..4294967295 (0..4294967295 -)
+     * Scale: 1
+     * Offset: 0
+     */
+    uint32_t topo_counter;
 };
 
 /**
@@ -1495,6 +1548,203 @@ bool hstpf_can_traction_tract_force_is_in_range(int32_t value);
  * @return true if in range, false otherwise.
  */
 bool hstpf_can_traction_tract_force_is_in_phys_range(double value);
+
+/**
+ * Pack message Consist.
+ *
+ * @param[out] dst_p Buffer to pack the message into.
+ * @param[in] src_p Data to pack.
+ * @param[in] size Size of dst_p.
+ *
+ * @return Size of packed data, or negative error code.
+ */
+int hstpf_can_consist_pack(
+    uint8_t *dst_p,
+    const struct hstpf_can_consist_t *src_p,
+    size_t size);
+
+/**
+ * Unpack message Consist.
+ *
+ * @param[out] dst_p Object to unpack the message into.
+ * @param[in] src_p Message to unpack.
+ * @param[in] size Size of src_p.
+ *
+ * @return zero(0) or negative error code.
+ */
+int hstpf_can_consist_unpack(
+    struct hstpf_can_consist_t *dst_p,
+    const uint8_t *src_p,
+    size_t size);
+
+/**
+ * Init message fields to default values from Consist.
+ *
+ * @param[in] msg_p Message to init.
+ *
+ * @return zero(0) on success or (-1) in case of nullptr argument.
+ */
+int hstpf_can_consist_init(struct hstpf_can_consist_t *msg_p);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_consist_e2e_crc_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_consist_e2e_crc_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_e2e_crc_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_e2e_crc_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_consist_e2e_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_consist_e2e_counter_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_e2e_counter_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_e2e_counter_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint8_t hstpf_can_consist_topo_valid_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_consist_topo_valid_decode(uint8_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_topo_valid_is_in_range(uint8_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_topo_valid_is_in_phys_range(double value);
+
+/**
+ * Encode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to encode.
+ *
+ * @return Encoded signal.
+ */
+uint32_t hstpf_can_consist_topo_counter_encode(double value);
+
+/**
+ * Decode given signal by applying scaling and offset.
+ *
+ * @param[in] value Signal to decode.
+ *
+ * @return Decoded signal.
+ */
+double hstpf_can_consist_topo_counter_decode(uint32_t value);
+
+/**
+ * Check that given signal is in allowed range.
+ *
+ * @param[in] value Signal to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_topo_counter_is_in_range(uint32_t value);
+
+/**
+ * Check that given physical value is in allowed range before encoding.
+ *
+ * Use this BEFORE calling _encode() to avoid silent integer overflow:
+ *   encode(-1.0) on a [0,100] signal wraps to 255 and passes is_in_range().
+ *   is_in_phys_range(-1.0) correctly returns false.
+ *
+ * @param[in] value Physical signal value to check.
+ *
+ * @return true if in range, false otherwise.
+ */
+bool hstpf_can_consist_topo_counter_is_in_phys_range(double value);
 
 /**
  * Pack message EstState.

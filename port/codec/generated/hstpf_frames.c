@@ -6,6 +6,7 @@
 const hstpf_frame_info_t hstpf_frames[HSTPF_FRAMES_COUNT] = {
     {0x100u, 0x1101u, 8u, 100u, 3u, 500u, "Position"},
     {0x101u, 0x1102u, 8u, 100u, 3u, 500u, "Traction"},
+    {0x102u, 0x1103u, 8u, 1000u, 3u, 5000u, "Consist"},
     {0x200u, 0x2101u, 8u, 100u, 3u, 5000u, "EstState"},
     {0x201u, 0x2107u, 8u, 100u, 3u, 5000u, "EstQuality"},
     {0x210u, 0x2102u, 8u, 1000u, 3u, 5000u, "EstType"},
@@ -95,6 +96,16 @@ uint8_t hstpf_frames_traction_tract_valid_raw(double phys)
 int32_t hstpf_frames_traction_tract_force_raw(double phys)
 {
     return (int32_t)raw_sat(phys, 0.01, 0.0, -8388608.0, 8388607.0);
+}
+
+uint8_t hstpf_frames_consist_topo_valid_raw(double phys)
+{
+    return (uint8_t)raw_sat(phys, 1.0, 0.0, 0.0, 1.0);
+}
+
+uint32_t hstpf_frames_consist_topo_counter_raw(double phys)
+{
+    return (uint32_t)raw_sat(phys, 1.0, 0.0, 0.0, 4294967295.0);
 }
 
 uint8_t hstpf_frames_est_state_est_valid_raw(double phys)

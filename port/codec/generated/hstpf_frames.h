@@ -18,7 +18,7 @@ extern "C" {
 #define HSTPF_E2E_DEFAULT_TIMEOUT_MS 500u
 
 /** Number of frames in hstpf_frames[]. */
-#define HSTPF_FRAMES_COUNT 10u
+#define HSTPF_FRAMES_COUNT 11u
 
 /* Position: Measured train position along the run. */
 #define HSTPF_FRAME_POSITION_ID 0x100u
@@ -35,6 +35,14 @@ extern "C" {
 #define HSTPF_FRAME_TRACTION_CYCLE_MS 100u
 #define HSTPF_FRAME_TRACTION_E2E_MAX_DELTA 3u
 #define HSTPF_FRAME_TRACTION_E2E_TIMEOUT_MS 500u
+
+/* Consist: The train's composition as the train control knows it. */
+#define HSTPF_FRAME_CONSIST_ID 0x102u
+#define HSTPF_FRAME_CONSIST_DATA_ID 0x1103u
+#define HSTPF_FRAME_CONSIST_LENGTH 8u
+#define HSTPF_FRAME_CONSIST_CYCLE_MS 1000u
+#define HSTPF_FRAME_CONSIST_E2E_MAX_DELTA 3u
+#define HSTPF_FRAME_CONSIST_E2E_TIMEOUT_MS 5000u
 
 /* EstState: Estimated position and speed (blended over models). */
 #define HSTPF_FRAME_EST_STATE_ID 0x200u
@@ -145,6 +153,10 @@ uint16_t hstpf_frames_position_fix_time_raw(double phys);
 uint8_t hstpf_frames_traction_tract_valid_raw(double phys);
 /** Traction.TractForce: scale 0.01, [-83886.1, 83886.1] kN. */
 int32_t hstpf_frames_traction_tract_force_raw(double phys);
+/** Consist.TopoValid: scale 1, [0, 1]. */
+uint8_t hstpf_frames_consist_topo_valid_raw(double phys);
+/** Consist.TopoCounter: scale 1, [0, 4.29497e+09]. */
+uint32_t hstpf_frames_consist_topo_counter_raw(double phys);
 /** EstState.EstValid: scale 1, [0, 1]. */
 uint8_t hstpf_frames_est_state_est_valid_raw(double phys);
 /** EstState.EstFault: scale 1, [0, 1]. */
