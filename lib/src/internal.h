@@ -10,6 +10,8 @@
  * which the weights wait, s: braking from the speeds where the models
  * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
 #define HSTPF__ARRIVAL_MAX_S 10.0
+/* A step longer than this many dt_nominal_s is predicted in parts (bank.c) */
+#define HSTPF__SUBSTEP_RATIO 1.5
 /* Largest sum of state magnitudes (m, m/s, their variances, log weights)
  * a working filter can hold: positions are re-based within 1 km, speeds
  * below 200 m/s, variances bounded by max_gap_s; beyond, it ran away */

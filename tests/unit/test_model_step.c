@@ -302,9 +302,10 @@ static void test_paper_weight(void **state)
 }
 
 /* Noise scaling: samples are scaled by sqrt(T / dt_nominal). With w_s ~
- * N(0, 0.3) and T = 4 s, s' - s - T v has sd 0.6: the sample sd over 2 x
- * 256 particles within 3.29 / sqrt(2 N) relative (alpha = 0.001), mean
- * within 3.29 sd / sqrt(N). */
+ * N(0, 0.3), dt_nominal 2.7 s and T = 4 s (one part: a step over 1.5
+ * dt_nominal is predicted in parts, bank.c), s' - s - T v has sd 0.3
+ * sqrt(4 / 2.7): the sample sd over 2 x 256 particles within 3.29 /
+ * sqrt(2 N) relative (alpha = 0.001), mean within 3.29 sd / sqrt(N). */
 static void test_noise_scaling(void **state)
 {
     static double s0[2][HSTPF_MAX_PARTICLES], s1[HSTPF_MAX_PARTICLES];
@@ -317,6 +318,7 @@ static void test_noise_scaling(void **state)
     base_config(&c);
     c.n_particles = HSTPF_MAX_PARTICLES;
     c.noise_s.sd = 0.3;
+    c.dt_nominal_s = 2.7;
     tu_workspace(&c, 1);
     assert_int_equal(hstpf_init(&filt2, sizeof filt2, &c), HSTPF_OK);
     step(&filt2, 1.0, 0.0, 2000.0, 1);
@@ -333,8 +335,8 @@ static void test_noise_scaling(void **state)
         }
     }
     sd = sqrt(sum2 / n - (sum / n) * (sum / n));
-    TU_CLOSE(sum / n, 0.0, 3.29 * 0.6 / sqrt((double)n));
-    TU_CLOSE(sd, 0.6, 0.6 * 3.29 / sqrt(2.0 * n));
+    TU_CLOSE(sum / n, 0.0, 3.29 * 0.3 * sqrt(4.0 / 2.7) / sqrt((double)n));
+    TU_CLOSE(sd, 0.3 * sqrt(4.0 / 2.7), 0.3 * sqrt(4.0 / 2.7) * 3.29 / sqrt(2.0 * n));
 }
 
 /* A step without a position predicts only: weights unchanged, loglik 0,

@@ -54,6 +54,11 @@ typedef struct {
     double swap_after_s;        /* at the first stop held after this, the truth becomes row truth + swap_rows */
     int swap_rows;
     double trac_gap_at_s;       /* no traction from here for 20-60 s (0 = none) */
+    /* long steps (zero for the others): the inputs of merge_s seconds from
+     * merge_at_s fed as one step with the next (an input gap), or one step
+     * per step_every seconds (sparse fixes), each with the mean traction */
+    double merge_at_s, merge_s;
+    int step_every;
 } scenario_t;
 
 typedef struct timetable {
@@ -403,6 +408,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     const double t_event = w->sc->clock_step_s != 0.0 ? w->sc->clock_at_s : 0.0;
     int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     double ref_off = 0.0;          /* the reference's restart: added to the truth and its fixes */
+    double acc_dt = 0.0, acc_u = 0.0; /* inputs merged into the next step (long steps) */
     double u_known = 0.0, q_gap[MAXM]; /* the traction gap: the last traction before it, the weights */
     int decl_prev = -1, new_truth = -1; /* the type change: the declared row before the step, the new truth */
     hstpf_theta_t bank[MAXM];
@@ -630,6 +636,18 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                     (void)hstpf_reacquire(fo);
                 }
             }
+        }
+        if ((w->sc->merge_s > 0.0 && smp.t >= w->sc->merge_at_s && smp.t < w->sc->merge_at_s + w->sc->merge_s) ||
+            (w->sc->step_every > 1 && sim.k % (unsigned)w->sc->step_every != 0u)) {
+            /* no input now: it comes with the next step, which spans this one too */
+            acc_u += in.traction * in.dt_s;
+            acc_dt += in.dt_s;
+            continue;
+        }
+        if (acc_dt > 0.0) {
+            in.traction = (acc_u + in.traction * in.dt_s) / (acc_dt + in.dt_s);
+            in.dt_s += acc_dt;
+            acc_u = acc_dt = 0.0;
         }
         if (fo) {
             hstpf_estimate_t eo;
@@ -1041,6 +1059,10 @@ static const scenario_t scenarios[] = {
     /* traction present but wrong: a gain 20 % low (a motor cut out, reported for all) and, from 16 s
      * before the departure from the second station, the sign swapped */
     {.name = "gain-20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = -0.20},
+    /* braking into the second station (from about 767 s), no input for 29 s: one step of 30 s */
+    {.name = "gap29", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .merge_at_s = 800.0, .merge_s = 29.0},
+    /* one step per fix, a fix every 5 s (a caller that steps on each fix of a slow receiver) */
+    {.name = "fix5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_every = 5},
     {.name = "tracsign", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .sign_flip_at_s = 1010.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */

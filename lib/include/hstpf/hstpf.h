@@ -66,6 +66,13 @@ extern "C" {
  *  "The fixes must run forwards"). */
 #define HSTPF_REF_PROBATION_S 30.0
 
+/** Most parts a long step is predicted in: a step longer than 1.5 x
+ *  dt_nominal_s is predicted in ceil(dt_s / dt_nominal_s) parts of the
+ *  model's own step, at most this many, the fix taken at the last, so
+ *  that s' = s + T v holds over an outage or sparse fixes (docs/model.md,
+ *  "Long steps"). Such a step costs that many predictions. */
+#define HSTPF_SUBSTEPS_MAX 64u
+
 /** The shortest standstill at which hstpf_config_t.consist_change_p
  *  applies, s: coupling or splitting a consist, with its brake test, takes
  *  minutes. A 2-minute station stop or a signal does not change the train,
