@@ -113,7 +113,8 @@ def tracgaps(d: Path) -> str:
 # what is published at the stops and under a traction that is wrong (the
 # journeys' "standstill published" line); -nocheck: cfg.traction_check = 0
 HONESTY = ["stops", "day", "start300", "restart", "tracgap", "swap", "off15", "grade8", "stops-t", "stops-case2",
-           "tracsign", "tracsign-nocheck", "gain-20", "gain-20-nocheck"]
+           "tracsign", "tracsign-nocheck", "gain-20", "gain-20-nocheck", "gap29", "gap29-before", "fix5",
+           "fix5-before"]
 
 
 def honesty(d: Path) -> str:
