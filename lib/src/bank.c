@@ -87,6 +87,7 @@ static void reset_state(hstpf_t *f)
         m->floor_run = 0;
         m->track_hint = 0;
     }
+    hstpf__trac_check_snapshot(f);
     f->origin_m = 0.0;
     f->time_s = 0.0;
     f->held_s = 0.0;
@@ -287,6 +288,7 @@ int32_t hstpf_consist_changed(hstpf_t *f)
         return HSTPF_E_INIT;
     }
     consist_mix(f, 1.0);
+    hstpf__trac_check_snapshot(f);
     f->status = f->declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED;
     f->declared = -1;
     f->leader = -1;
@@ -557,7 +559,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at
      * the weight floor that happens to lie near it would take all the
      * weight for that step. A second one in a row moves them as usual. */
-    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run;
+    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run && !f->tc.fault;
     if (weigh) {
         if (f->stop_s >= HSTPF_CONSIST_STOP_S && f->cfg.consist_change_p > 0.0) {
             consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a stop */

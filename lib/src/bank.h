@@ -49,6 +49,9 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 #define HSTPF__TRAC_NATS 25.0
 #define HSTPF__TRAC_SETTLE 3 /* fixes a newly placed shadow does not test */
 void hstpf__trac_check_reset(hstpf_t *f);
+/* The weights a raised fault goes back to: taken while the traction fits,
+ * and wherever the weights are set anew (init, reset, a consist change). */
+void hstpf__trac_check_snapshot(hstpf_t *f);
 /* Before the bank steps: whether the fault stands this step (it ends
  * HSTPF_TRAC_RETRY_S after it was raised), and the shadow placed if it has
  * none. */

@@ -289,6 +289,7 @@ void hstpf__nonfinite_reset(hstpf_t *f)
         }
     }
     f->rf.placed = 0; /* its theta too may be what went non-finite */
+    hstpf__trac_check_snapshot(f); /* never back to weights that were not finite */
     ++f->nonfinite_resets;
     hstpf__drop_lock(f, 0);
 }

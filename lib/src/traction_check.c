@@ -54,6 +54,14 @@ void hstpf__trac_check_reset(hstpf_t *f)
     memset(&f->tc, 0, sizeof f->tc);
 }
 
+void hstpf__trac_check_snapshot(hstpf_t *f)
+{
+    uint16_t l;
+    for (l = 0; l < hstpf__n_hyp(f); ++l) {
+        f->tc.logq0[l] = *hstpf__logq_of(f, l);
+    }
+}
+
 void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt)
 {
     hstpf_trac_check_t *c = &f->tc;
@@ -125,7 +133,23 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
     clip = standstill ? HSTPF__TRAC_CLIP_HELD : HSTPF__TRAC_CLIP;
     r = r > clip ? clip : (r < -clip ? -clip : r);
     c->cusum = c->cusum + r > 0.0 ? c->cusum + r : 0.0;
+    if (c->cusum == 0.0) {
+        /* the traction fits: the weights so far are the last it can have
+         * misled (this step's update comes after) */
+        hstpf__trac_check_snapshot(f);
+    }
     if (c->cusum > HSTPF__TRAC_NATS) {
+        uint16_t l;
+        /* the weights moved on the wrong traction while the CUSUM rose
+         * (a traction stuck at its cruise value as the train brakes: a
+         * wrong row at q = 1.000 within 10 s, declared 14 s after the
+         * retry, a review): back to where they were, the declaration's
+         * hold and the "no type fits" hold from scratch */
+        for (l = 0; l < hstpf__n_hyp(f); ++l) {
+            *hstpf__logq_of(f, l) = c->logq0[l];
+        }
+        f->held_s = 0.0;
+        f->fit_held_s = 0.0;
         /* found again soon after a retry: the fault stands, wait longer
          * before the next (each retry publishes the wrong traction's
          * estimate until it is found again) */

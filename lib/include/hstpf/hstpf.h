@@ -638,6 +638,7 @@ typedef struct {
     double fault_s;    /* time since the fault was raised */
     double retry_s;    /* how long this one stands: HSTPF_TRAC_RETRY_S, doubled when found again soon after */
     double since_retry_s; /* time since the last retry */
+    double logq0[HSTPF_MAX_MODELS + 1]; /* the weights when the CUSUM was last 0 (rows, then the hypothesis) */
 } hstpf_trac_check_t;
 
 /**
