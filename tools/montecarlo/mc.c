@@ -59,6 +59,8 @@ typedef struct {
      * per step_every seconds (sparse fixes), each with the mean traction */
     double merge_at_s, merge_s;
     int step_every;
+    /* a traction signal stuck at its value at stuck_at_s for stuck_s (0 = none) */
+    double stuck_at_s, stuck_s;
 } scenario_t;
 
 typedef struct timetable {
@@ -409,6 +411,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     int at_rest = 0, have_fix = 0; /* at_rest: 1 standing, 2 and held */
     double ref_off = 0.0;          /* the reference's restart: added to the truth and its fixes */
     double acc_dt = 0.0, acc_u = 0.0; /* inputs merged into the next step (long steps) */
+    double u_stuck = 0.0;             /* the stuck traction's value */
     double u_known = 0.0, q_gap[MAXM]; /* the traction gap: the last traction before it, the weights */
     int decl_prev = -1, new_truth = -1; /* the type change: the declared row before the step, the new truth */
     hstpf_theta_t bank[MAXM];
@@ -579,6 +582,13 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         double qt;
         hstpf_sim_next_input(&sim, &smp, &in);
         in.traction *= 1.0 + w->sc->gain_bias;
+        if (w->sc->stuck_s > 0.0 && smp.t >= w->sc->stuck_at_s) {
+            if (smp.t < w->sc->stuck_at_s + 0.5) {
+                u_stuck = in.traction;
+            } else if (smp.t < w->sc->stuck_at_s + w->sc->stuck_s) {
+                in.traction = u_stuck; /* the sender's value frozen, its frames still valid */
+            }
+        }
         if (w->sc->sign_flip_at_s > 0.0 && smp.t >= w->sc->sign_flip_at_s) {
             in.traction = -in.traction; /* a wiring or a signal definition swapped */
         }
@@ -1063,6 +1073,10 @@ static const scenario_t scenarios[] = {
     {.name = "gap29", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .merge_at_s = 800.0, .merge_s = 29.0},
     /* one step per fix, a fix every 5 s (a caller that steps on each fix of a slow receiver) */
     {.name = "fix5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_every = 5},
+    /* the traction stuck at its cruise value from the start of the braking into the second station (769 s), 30 s */
+    {.name = "stuck30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 768.0, .stuck_s = 31.0},
+    /* the holding brake still reported for the first 10 s of the departure from the second station (1 030 s) */
+    {.name = "late10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 11.0},
     {.name = "tracsign", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .sign_flip_at_s = 1010.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
