@@ -515,9 +515,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     has_y = has_y && !gated;
     /* all checks passed: from here on the step cannot fail */
     e = hstpf__engine_of(f);
-    hstpf__trac_check_begin(f, !free_run, in->dt_s);
-    trac_known = !free_run;
-    free_run = free_run || f->tc.fault; /* a traction that cannot be right is not used */
+    hstpf__trac_check_begin(f, !free_run, free_run ? 0.0 : f->xi * in->traction, in->dt_s);
+    trac_known = !free_run && !f->tc.release;
+    /* a traction that cannot be right is not used, nor one that holds a train that moves */
+    free_run = free_run || f->tc.fault || f->tc.release;
     xu = free_run ? free_xu(f, -1.0) : f->xi * in->traction;
     st.dt = in->dt_s;
     st.xu = xu;

@@ -48,6 +48,16 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 #define HSTPF__TRAC_CLIP_HELD 1.0 /* at a standstill (see bank.c) */
 #define HSTPF__TRAC_NATS 25.0
 #define HSTPF__TRAC_SETTLE 3 /* fixes a newly placed shadow does not test */
+/* A held bank released (traction_check.c): the CUSUM of the fixes' lead
+ * over the held position in fix-noise sd, each less HSTPF__RELEASE_K,
+ * past HSTPF__RELEASE_H (a departure at 0.5 m/s^2 with Case 1's 2.24 m
+ * fixes: about 7 s); released, HSTPF__RELEASE_STILL fixes in a row with
+ * the leading row's speed within 1 sd or HSTPF__RELEASE_STOP of 0 end it */
+#define HSTPF__RELEASE_K 0.5
+#define HSTPF__RELEASE_H 15.0
+#define HSTPF__RELEASE_CLIP 5.0 /* each fix adds at most this many sd */
+#define HSTPF__RELEASE_STOP 0.1 /* m/s */
+#define HSTPF__RELEASE_STILL 10
 void hstpf__trac_check_reset(hstpf_t *f);
 /* The weights a raised fault goes back to: taken while the traction fits,
  * and wherever the weights are set anew (init, reset, a consist change). */
@@ -55,7 +65,7 @@ void hstpf__trac_check_snapshot(hstpf_t *f);
 /* Before the bank steps: whether the fault stands this step (it ends
  * HSTPF_TRAC_RETRY_S after it was raised), and the shadow placed if it has
  * none. */
-void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt);
+void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double xu, double dt);
 /* After the bank stepped, before its weights move: the shadow steps on st
  * (the bank's step) without the traction; with test, and a fix, the CUSUM
  * takes this fix. */

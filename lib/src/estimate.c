@@ -292,7 +292,7 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
         out->resistance = (real)hstpf_resistance(&t, v);
     }
     out->standstill = f->standstill;
-    out->traction_fault = f->tc.fault;
+    out->traction_fault = (uint8_t)(f->tc.fault ? 1u : (f->tc.release ? 2u : 0u));
     out->best = best;
     out->declared = f->declared;
     out->status = f->status;

@@ -62,13 +62,24 @@ void hstpf__trac_check_snapshot(hstpf_t *f)
     }
 }
 
-void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double dt)
+void hstpf__trac_check_begin(hstpf_t *f, int traction_known, double xu, double dt)
 {
     hstpf_trac_check_t *c = &f->tc;
     if (!checking(f)) {
         c->fault = 0;
+        c->release = 0;
         c->placed = 0;
         return;
+    }
+    if (c->release && traction_known) {
+        /* the traction caught up when it can move the leading row */
+        const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
+        uint16_t hint = m->track_hint;
+        const double g = f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, m->s_mean) : 0.0;
+        if (xu > (double)m->k0 + g) {
+            c->release = 0;
+            c->rel_run = 0;
+        }
     }
     c->since_retry_s += dt;
     c->fault_s += c->fault ? dt : 0.0;
@@ -117,6 +128,37 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
     if (hstpf__kalman_lost(&f->m[hstpf__leading_row(f)], c->sh.kx[0], c->sh.kx[1], c->sh.kp[0], c->sh.kp[2])) {
         place(f); /* far from the bank (engine.h's rule): placed again, its CUSUM kept */
         return;
+    }
+    if (st.has_y) {
+        /* Held, while the fixes run ahead of the held position: a holding
+         * brake reported late or stuck at a departure, a train that rolls.
+         * The held models cannot follow (only a traction above c0 starts
+         * them): a one-sided CUSUM of the fixes' standardised lead over the
+         * leading row, less HSTPF__RELEASE_K, past HSTPF__RELEASE_H takes
+         * the traction as unknown until it can move the train, or the
+         * models find the train standing again. A held position a few
+         * metres off (a stop taken a step early) is pulled to the fixes
+         * within a few of them and adds little. */
+        const hstpf_model_t *m = &f->m[hstpf__leading_row(f)];
+        const double sd_e = f->noise_mom[5] > 0.0 ? f->noise_mom[5] : 1.0;
+        if (!c->release) {
+            double z = (st.yr - f->noise_mom[4] - (double)m->s_mean) / sd_e;
+            z = (z < HSTPF__RELEASE_CLIP ? z : HSTPF__RELEASE_CLIP) - HSTPF__RELEASE_K; /* a heavy tail's outlier */
+            c->rel_d = standstill && c->rel_d + z > 0.0 ? c->rel_d + z : 0.0;
+            if (c->rel_d > HSTPF__RELEASE_H) {
+                c->release = 1;
+                c->rel_d = 0.0;
+                c->rel_run = 0;
+            }
+        } else {
+            const double v = (double)m->v_mean, sd_v = sqrt((double)m->v_var > 0.0 ? (double)m->v_var : 0.0);
+            const int still = v < sd_v || v < HSTPF__RELEASE_STOP;
+            c->rel_run = (uint8_t)(still ? c->rel_run + 1u : 0u);
+            if (c->rel_run >= HSTPF__RELEASE_STILL) {
+                c->release = 0;
+                c->rel_run = 0;
+            }
+        }
     }
     if (!test || !st.has_y) {
         return;

@@ -114,7 +114,7 @@ def tracgaps(d: Path) -> str:
 # journeys' "standstill published" line); -nocheck: cfg.traction_check = 0
 HONESTY = ["stops", "day", "start300", "restart", "tracgap", "swap", "off15", "grade8", "stops-t", "stops-case2",
            "tracsign", "tracsign-nocheck", "gain-20", "gain-20-nocheck", "gap29", "gap29-before", "fix5",
-           "fix5-before", "stuck30", "stuck30-before", "late10", "late10-before"]
+           "fix5-before", "stuck30", "stuck30-before", "late10", "late10-before", "late60", "late60-before"]
 
 
 def honesty(d: Path) -> str:

@@ -481,7 +481,10 @@ typedef struct {
      *  a wrong signal; docs/model.md, "A traction that cannot be right").
      *  The steps then take it as unknown, no weight moves and no type is
      *  declared, for HSTPF_TRAC_RETRY_S; then it is believed and tested
-     *  again. 0 with cfg.traction_check off. */
+     *  again. 2 while the train moves although the traction reported holds
+     *  it at rest (a holding brake reported late or stuck at a departure, a
+     *  train that rolls): taken as unknown until it can move the train or
+     *  the train stands again. 0 with cfg.traction_check off. */
     uint8_t traction_fault;
     hstpf_real_t theta[3];  /**< sum_l b_l theta_l (Table 2, State A(1)); a declared row's theta */
     /** Covariance of theta (c0c0, c0c1, c0c2, c1c1, c1c2, c2c2): the mixture
@@ -639,6 +642,9 @@ typedef struct {
     double retry_s;    /* how long this one stands: HSTPF_TRAC_RETRY_S, doubled when found again soon after */
     double since_retry_s; /* time since the last retry */
     double logq0[HSTPF_MAX_MODELS + 1]; /* the weights when the CUSUM was last 0 (rows, then the hypothesis) */
+    uint8_t release;   /* the train moves although the traction holds it: taken as unknown */
+    uint8_t rel_run;   /* released: consecutive fixes at which the train looked at rest */
+    double rel_d;      /* held: CUSUM of the fixes' lead over the held position */
 } hstpf_trac_check_t;
 
 /**
