@@ -256,10 +256,6 @@ static void update_model_weights(hstpf_t *f)
     }
 }
 
-/* Every state, variance and log weight finite and physically possible:
- * one sum of their magnitudes, NaN or infinite if any is, and beyond
- * HSTPF__STATE_MAX when a state ran away while still finite (the blend of
- * a huge double state would publish infinity; fuzz regression). */
 /* The consist may have changed with probability p (p = 1: it did): each
  * hypothesis' weight becomes (1 - p) q + p x its prior weight (the rows'
  * (1 - refine_prior_q) / n, the continuous one's refine_prior_q), and the
@@ -300,6 +296,10 @@ int32_t hstpf_consist_changed(hstpf_t *f)
     return HSTPF_OK;
 }
 
+/* Every state, variance and log weight finite and physically possible:
+ * one sum of their magnitudes, NaN or infinite if any is, and beyond
+ * HSTPF__STATE_MAX when a state ran away while still finite (the blend of
+ * a huge double state would publish infinity; fuzz regression). */
 static int finite_models(const hstpf_t *f)
 {
     double z = fabs(f->rf.logq);
