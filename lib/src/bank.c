@@ -108,6 +108,7 @@ static void reset_state(hstpf_t *f)
     f->weights_wait = 0;
     f->arrival_s = 0.0;
     f->stop_s = 0.0;
+    f->mix_pending = 0;
     f->outlier_run = 0;
     f->lost_run = 0;
     f->outliers = 0;
@@ -269,6 +270,9 @@ static void consist_mix(hstpf_t *f, double p)
         double *lq = hstpf__logq_of(f, l);
         const double prior = l < f->cfg.n_models ? (1.0 - q0) / (double)f->cfg.n_models : q0;
         *lq = log((1.0 - p) * exp(*lq) + p * prior);
+        /* and the weights a traction fault would go back to: the prior is
+         * no evidence of the traction's */
+        f->tc.logq0[l] = log((1.0 - p) * exp(f->tc.logq0[l]) + p * prior);
     }
     if (f->rf.active && f->rf.placed) {
         hstpf__refine_consist(f, p);
@@ -293,6 +297,7 @@ int32_t hstpf_consist_changed(hstpf_t *f)
     f->fit = HSTPF_FIT_UNKNOWN;
     f->fit_held_s = 0.0;
     f->stop_s = 0.0;
+    f->mix_pending = 0;
     return HSTPF_OK;
 }
 
@@ -419,10 +424,10 @@ static void engines_substep(hstpf_t *f, const hstpf__engine_t *e, const hstpf__s
  * step braking at 0.5 m/s^2, and a departure from rest moves nothing for
  * the whole step (a review: a 29 s gap while braking from 300 km/h, one
  * step, declared a wrong type in 585 of 850 runs, speeds 26 m/s off at
- * 33 sd). Such a step is predicted in substeps() equal parts
+ * 33 sd). Such a step is predicted in hstpf__substeps() equal parts
  * with its traction, as the model's own train would run, and the fix is
  * taken at the last; a step up to 1.5 dt_nominal_s is one part, as before. */
-static uint32_t substeps(const hstpf_t *f, double dt)
+uint32_t hstpf__substeps(const hstpf_t *f, double dt)
 {
     const double r = dt / f->cfg.dt_nominal_s;
     if (!(r > HSTPF__SUBSTEP_RATIO)) {
@@ -433,7 +438,7 @@ static uint32_t substeps(const hstpf_t *f, double dt)
 
 static void engines_step(hstpf_t *f, const hstpf__engine_t *e, const hstpf__step_t *st)
 {
-    const uint32_t n = substeps(f, st->dt);
+    const uint32_t n = hstpf__substeps(f, st->dt);
     hstpf__step_t sub = *st;
     uint32_t i;
     if (n > 1u) {
@@ -536,7 +541,14 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         const int hold = weights_hold(f, in->dt_s);
         f->standstill = (uint8_t)(hold == 2);
         f->weights_wait = (uint8_t)(hold != 0);
-        f->stop_s += f->standstill ? in->dt_s : 0.0;
+        /* one standstill's length; when one of HSTPF_CONSIST_STOP_S ends,
+         * the next weighted step mixes the consist's prior */
+        if (f->standstill) {
+            f->stop_s += in->dt_s;
+        } else if (!f->weights_wait) {
+            f->mix_pending = (uint8_t)(f->mix_pending || f->stop_s >= HSTPF_CONSIST_STOP_S);
+            f->stop_s = 0.0;
+        }
     }
     if (has_y) {
         /* every model that carries weight put this fix beyond its floor:
@@ -562,10 +574,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * weight for that step. A second one in a row moves them as usual. */
     weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run && !f->tc.fault;
     if (weigh) {
-        if (f->stop_s >= HSTPF_CONSIST_STOP_S && f->cfg.consist_change_p > 0.0) {
-            consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a stop */
+        if (f->mix_pending && f->cfg.consist_change_p > 0.0) {
+            consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a long stop */
         }
-        f->stop_s = 0.0;
+        f->mix_pending = 0;
         update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {

@@ -58,6 +58,9 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 #define HSTPF__RELEASE_CLIP 5.0 /* each fix adds at most this many sd */
 #define HSTPF__RELEASE_STOP 0.1 /* m/s */
 #define HSTPF__RELEASE_STILL 10
+/* How many parts a step of dt is predicted in (bank.c): 1 up to 1.5
+ * dt_nominal_s, else ceil(dt / dt_nominal_s), at most HSTPF_SUBSTEPS_MAX. */
+uint32_t hstpf__substeps(const hstpf_t *f, double dt);
 void hstpf__trac_check_reset(hstpf_t *f);
 /* The weights a raised fault goes back to: taken while the traction fits,
  * and wherever the weights are set anew (init, reset, a consist change). */

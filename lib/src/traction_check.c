@@ -120,6 +120,26 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
     st.free_run = 1;
     st.xu = (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, (real)c->sh.kx[0]) : 0.0) + 1e-3;
     st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt * f->cfg.dt_nominal_s;
+    {
+        /* in the bank's parts (bank.c): in one, a long step's unknown
+         * acceleration left out its T^2 spread of the position, and a
+         * wrong traction was found a minute later at a fix every 10 s (a
+         * review) */
+        const uint32_t n = hstpf__substeps(f, st.dt);
+        if (n > 1u) {
+            hstpf__step_t sub = st;
+            uint32_t i;
+            sub.dt = st.dt / (double)n;
+            sub.scale = (double)(real)sqrt(sub.dt / f->cfg.dt_nominal_s);
+            sub.acc_var = st.acc_var / (double)n;
+            sub.has_y = 0;
+            for (i = 1; i < n; ++i) {
+                (void)hstpf__kalman_step(f, &c->sh, &sub, &held, &floored);
+            }
+            sub.has_y = st.has_y;
+            st = sub;
+        }
+    }
     ll_sh = hstpf__kalman_step(f, &c->sh, &st, &held, &floored);
     if (!(isfinite(ll_sh) && isfinite(c->sh.kx[0]) && isfinite(c->sh.kx[1]))) {
         c->placed = 0;
@@ -160,8 +180,8 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
             }
         }
     }
-    if (!test || !st.has_y) {
-        return;
+    if (!test || !st.has_y || c->release) {
+        return; /* released this step: the traction is no longer what is tested */
     }
     if (c->settle > 0u) {
         /* a shadow just placed predicts the next position from the bank's

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "refine.h"
 #include "testbuild.h"
 #include "testutil.h"
 
@@ -688,7 +689,7 @@ static void consist_stop(int dwell_s, double *max_err)
                 *max_err = d > *max_err ? d : *max_err;
                 assert_true(d < 1e-9);
             }
-            assert_true(filt.stop_s == 0.0);
+            assert_true(filt.stop_s == 0.0 && filt.mix_pending == 0);
             checked = 1;
         }
         truth_step(&t, u);
@@ -872,6 +873,157 @@ static void test_traction_stuck_rollback(void **state)
     assert_true(raised > 200 && raised < 300); /* found during the braking */
 }
 
+/* The continuous hypothesis' theta under the consist's prior: the moments
+ * of (1 - p) N(m, P) + p N(mu0, P0) over theta (the posterior and Table 1's
+ * prior, here computed by hand from the rows: the moment-matched mixture of
+ * N(theta_l, diag(0.3 theta_l)^2)), the cross terms with s, v and k times
+ * 1 - p, s, v and k unchanged; positive definite after (a Cholesky
+ * factorisation); p = 1 (hstpf_consist_changed) is the prior exactly. */
+static int cholesky_ok(const double *a, int n)
+{
+    double l[36];
+    int i, j, k;
+    memset(l, 0, sizeof l);
+    for (j = 0; j < n; ++j) {
+        double d = a[j * n + j];
+        for (k = 0; k < j; ++k) {
+            d -= l[j * n + k] * l[j * n + k];
+        }
+        if (!(d > 0.0)) {
+            return 0;
+        }
+        l[j * n + j] = sqrt(d);
+        for (i = j + 1; i < n; ++i) {
+            double x = a[i * n + j];
+            for (k = 0; k < j; ++k) {
+                x -= l[i * n + k] * l[j * n + k];
+            }
+            l[i * n + j] = x / l[j * n + j];
+        }
+    }
+    return 1;
+}
+
+static void test_consist_theta(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    double z0[HSTPF_REFINE_NZ], p0[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ], mu[3] = {0, 0, 0}, cov0[9], d[3];
+    const double p = 0.3;
+    const int nz = HSTPF_REFINE_NZ;
+    int k, i, j;
+    uint16_t l;
+    (void)state;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 0.0, 200.0 / 3.6, 4);
+    for (k = 0; k < 300; ++k) { /* a posterior with cross terms */
+        const double u = hstpf_resistance(&t.th, t.v) + (k % 120 < 60 ? 15.0 : -15.0);
+        step(1.0, u, truth_fix(&t), 1);
+        truth_step(&t, u);
+    }
+    memset(cov0, 0, sizeof cov0);
+    for (l = 0; l < 3; ++l) {
+        const double th[3] = {models[l].c0, models[l].c1, models[l].c2};
+        for (i = 0; i < 3; ++i) {
+            mu[i] += th[i] / 3.0;
+        }
+    }
+    for (l = 0; l < 3; ++l) {
+        const double th[3] = {models[l].c0, models[l].c1, models[l].c2};
+        for (i = 0; i < 3; ++i) {
+            for (j = 0; j < 3; ++j) {
+                cov0[3 * i + j] += (th[i] - mu[i]) * (th[j] - mu[j]) / 3.0;
+            }
+            cov0[4 * i] += 0.09 * th[i] * th[i] / 3.0;
+        }
+    }
+    memcpy(z0, filt.rf.kz, sizeof z0);
+    memcpy(p0, filt.rf.kp, sizeof p0);
+    for (i = 0; i < 3; ++i) {
+        d[i] = z0[2 + i] - mu[i];
+    }
+    hstpf__refine_consist(&filt, p);
+    for (i = 0; i < nz; ++i) {
+        const int ti = i >= 2 && i <= 4;
+        TU_CLOSE(filt.rf.kz[i], ti ? (1.0 - p) * z0[i] + p * mu[i - 2] : z0[i], 1e-12 * fabs(z0[i]) + 1e-15);
+        for (j = 0; j < nz; ++j) {
+            const int tj = j >= 2 && j <= 4;
+            double want = p0[i * nz + j];
+            if (ti && tj) {
+                want = (1.0 - p) * want + p * cov0[3 * (i - 2) + (j - 2)] + p * (1.0 - p) * d[i - 2] * d[j - 2];
+            } else if (ti || tj) {
+                want *= 1.0 - p;
+            }
+            TU_CLOSE(filt.rf.kp[i * nz + j], want, 1e-12 * fabs(want) + 1e-300);
+        }
+    }
+    /* k is fixed by default (no variance): the 5 x 5 block of (s, v, theta) */
+    {
+        double a[25];
+        for (i = 0; i < 5; ++i) {
+            for (j = 0; j < 5; ++j) {
+                a[5 * i + j] = filt.rf.kp[i * nz + j];
+            }
+        }
+        assert_true(cholesky_ok(a, 5));
+    }
+    assert_int_equal(hstpf_consist_changed(&filt), HSTPF_OK);
+    for (i = 0; i < 3; ++i) {
+        TU_CLOSE(filt.rf.kz[2 + i], mu[i], 1e-12 * mu[i]);
+        for (j = 0; j < 3; ++j) {
+            TU_CLOSE(filt.rf.kp[(2 + i) * nz + 2 + j], cov0[3 * i + j], 1e-12 * fabs(cov0[3 * i + j]) + 1e-300);
+        }
+        TU_CLOSE(filt.rf.kp[0 * nz + 2 + i], 0.0, 0.0);
+        TU_CLOSE(filt.rf.kp[1 * nz + 2 + i], 0.0, 0.0);
+    }
+    TU_CLOSE(filt.rf.kz[0], z0[0], 1e-9); /* where the train is stays */
+}
+
+/* How a release ends: the traction catches up (reported above c0 from
+ * 80 s: released no more from that step), or the train stands again with
+ * the brake still reported (the release ends within HSTPF__RELEASE_STILL
+ * fixes and a few of its stop, and the standstill is published again). */
+static void test_release_ends(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    int k, mode, k_release, k_end, k_rest;
+    (void)state;
+    for (mode = 0; mode < 2; ++mode) {
+        config(&c, HSTPF_ENGINE_KALMAN);
+        tu_workspace(&c, 0);
+        assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+        truth_init(&t, "CRH3", 0.0, 0.0, 16);
+        k_release = k_end = k_rest = -1;
+        for (k = 0; k < 300; ++k) {
+            /* departs at 60 s; mode 1: brakes to rest from 110 s */
+            const double u_true = k < 60 ? -50.0 : (mode == 0 || k < 110 ? 40.0 : -50.0);
+            const double u_rep = mode == 0 && k >= 80 ? u_true : -50.0;
+            step(1.0, u_rep, truth_fix(&t), 1);
+            assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+            check_estimate(&e);
+            k_release = k_release < 0 && e.traction_fault == 2 ? k : k_release;
+            k_end = k_release >= 0 && k_end < 0 && e.traction_fault == 0 ? k : k_end;
+            k_rest = mode == 1 && k_rest < 0 && k > 110 && t.v == 0.0 ? k : k_rest;
+            truth_step(&t, u_true);
+        }
+        print_message("mode %d: released at %d s, ended at %d s (train at rest from %d s), standstill at the end %d\n",
+                      mode, k_release, k_end, k_rest, e.standstill);
+        assert_true(k_release > 60 && k_release < 80);
+        if (mode == 0) {
+            assert_int_equal(k_end, 80); /* the traction reported from 80 s moves the train */
+            assert_int_equal(e.standstill, 0);
+        } else {
+            assert_true(k_rest > 110 && k_end > k_rest && k_end <= k_rest + 30);
+            assert_int_equal(e.standstill, 1);
+            assert_int_equal(e.traction_fault, 0);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -883,6 +1035,7 @@ int main(void)
         cmocka_unit_test(test_nonfinite_reset),       cmocka_unit_test(test_stop_honest),
         cmocka_unit_test(test_weak_hold),             cmocka_unit_test(test_consist_change),
         cmocka_unit_test(test_long_step),             cmocka_unit_test(test_traction_stuck_rollback),
+        cmocka_unit_test(test_consist_theta),         cmocka_unit_test(test_release_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -701,7 +701,8 @@ typedef struct {
     uint8_t standstill;              /* this step's model weights were held */
     uint8_t weights_wait;            /* held or arriving: this step's weights did not move */
     double arrival_s;                /* time the weighted models disagreed on being at rest */
-    double stop_s;                   /* time at standstill since the weights last moved */
+    double stop_s;                   /* time this standstill has lasted */
+    uint8_t mix_pending;             /* a standstill of HSTPF_CONSIST_STOP_S ended: mix at the next weighted step */
     uint8_t ever_locked;
     double pend_y;                   /* that fix, absolute m */
     double pend_age_s;               /* time since it */
