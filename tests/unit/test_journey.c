@@ -68,6 +68,17 @@ static void step(double dt, double u, double y, int has_y)
     assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
 }
 
+/* A fresh Kalman-engine bank of config()'s rows and a CRH3 truth at s = 0
+ * moving at v0 (the later tests' start). */
+static void kalman_start(truth_t *t, double v0, uint64_t seed)
+{
+    hstpf_config_t c;
+    config(&c, HSTPF_ENGINE_KALMAN);
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(t, "CRH3", 0.0, v0, seed);
+}
+
 /* The published estimate agrees with itself: the declaration invariant of
  * hstpf.h and, when valid, finite values in range. */
 static void check_estimate(const hstpf_estimate_t *e)
@@ -264,16 +275,12 @@ static void test_clock_steps_particle(void **state)
  * the models again. */
 static void test_held_but_moving(void **state)
 {
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
     int k, k_release = -1, still_after = 0, bad = 0, valid_after = 0;
     double worst = 0.0;
     (void)state;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 0.0, 16);
+    kalman_start(&t, 0.0, 16);
     for (k = 0; k < 200; ++k) {
         const double u_true = k < 60 ? -50.0 : 40.0;
         step(1.0, -50.0, truth_fix(&t), 1); /* the brake, whatever the train does */
@@ -304,16 +311,12 @@ static void test_held_but_moving(void **state)
  * of the outage and the truth stays inside 4 sd; fixes then bring it back. */
 static void test_outage_sd_grows(void **state)
 {
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
     int k;
     double sd_prev = 0.0;
     (void)state;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 0.0, 14);
+    kalman_start(&t, 0.0, 14);
     for (k = 0; k < 300; ++k) {
         const int fix = !(k >= 150 && k < 210);
         step(1.0, 30.0, truth_fix(&t), fix);
@@ -411,15 +414,11 @@ static void test_declaration_states(void **state)
  * re-initialises from the next fixes and counts it. */
 static void test_nonfinite_reset(void **state)
 {
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
     int k;
     (void)state;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 50.0, 15);
+    kalman_start(&t, 50.0, 15);
     for (k = 0; k < 40; ++k) {
         if (k == 20) {
             filt.m[1].kx[1] = NAN; /* a corrupted state */
@@ -825,17 +824,13 @@ static void test_traction_stuck_rollback(void **state)
 {
     static double lq[1000][4];
     static double cus[1000];
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
     double u_prev = 0.0, u_stuck = 0.0;
     int k, raised = -1, k0 = -1;
     uint16_t l;
     (void)state;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 300.0 / 3.6, 3);
+    kalman_start(&t, 300.0 / 3.6, 3);
     for (k = 0; k < 1000; ++k) {
         /* cruise 200 s, then braking at 0.3 m/s^2 to 100 km/h and cruise;
          * the traction reported stuck at the cruise value from 200 to 240 s */
@@ -906,7 +901,6 @@ static int cholesky_ok(const double *a, int n)
 
 static void test_consist_theta(void **state)
 {
-    hstpf_config_t c;
     truth_t t;
     double z0[HSTPF_REFINE_NZ], p0[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ], mu[3] = {0, 0, 0}, cov0[9], d[3];
     const double p = 0.3;
@@ -914,10 +908,7 @@ static void test_consist_theta(void **state)
     int k, i, j;
     uint16_t l;
     (void)state;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 200.0 / 3.6, 4);
+    kalman_start(&t, 200.0 / 3.6, 4);
     for (k = 0; k < 300; ++k) { /* a posterior with cross terms */
         const double u = hstpf_resistance(&t.th, t.v) + (k % 120 < 60 ? 15.0 : -15.0);
         step(1.0, u, truth_fix(&t), 1);
