@@ -18,11 +18,13 @@
 static uint32_t pick_id(fuzz_in_t *in, uint8_t *flags)
 {
     const uint8_t sel = fuzz_u8(in);
-    switch (sel % 6u) {
+    switch (sel % 7u) {
     case 0:
         return HSTPF_FRAME_POSITION_ID;
     case 1:
         return HSTPF_FRAME_TRACTION_ID;
+    case 6:
+        return HSTPF_FRAME_CONSIST_ID;
     case 2:
         return hstpfd_tx_id(fuzz_u8(in) % HSTPFD_N_OUTPUTS);
     case 3:
@@ -35,8 +37,8 @@ static uint32_t pick_id(fuzz_in_t *in, uint8_t *flags)
 
 static void check_rx(const hstpfd_rx_t *r, const hstpfd_frame_t *f)
 {
-    FUZZ_CHECK(r->kind <= HSTPFD_RX_FORMAT, "kind %d", (int)r->kind);
-    if (r->kind == HSTPFD_RX_POSITION || r->kind == HSTPFD_RX_TRACTION) {
+    FUZZ_CHECK(r->kind <= HSTPFD_RX_CONSIST, "kind %d", (int)r->kind);
+    if (r->kind == HSTPFD_RX_POSITION || r->kind == HSTPFD_RX_TRACTION || r->kind == HSTPFD_RX_CONSIST) {
         FUZZ_CHECK(r->e2e <= HSTPF_E2E_COUNTER_JUMP, "e2e result %d", (int)r->e2e);
         FUZZ_CHECK(r->accepted == (hstpf_e2e_accepted(r->e2e) != 0), "accepted %d for %d", r->accepted, (int)r->e2e);
         FUZZ_CHECK(!r->valid || r->accepted, "valid but not accepted");
