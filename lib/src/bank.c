@@ -572,7 +572,8 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * (a heavy-tailed noise's): it moves no weight. Otherwise a model at
      * the weight floor that happens to lie near it would take all the
      * weight for that step. A second one in a row moves them as usual. */
-    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run && !f->tc.fault;
+    weigh = has_y && !f->weights_wait && f->lost_run != 1u && !f->pr.active && !free_run && !f->tc.fault &&
+            !f->tc.doubt;
     if (weigh) {
         if (f->mix_pending && f->cfg.consist_change_p > 0.0) {
             consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a long stop */

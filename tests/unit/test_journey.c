@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "hstpf_sim.h"
+#include "bank.h"
 #include "refine.h"
 #include "testbuild.h"
 #include "testutil.h"
@@ -818,8 +819,10 @@ static void test_long_step(void **state)
  * 14 s after the retry). When the fault is raised the weights go back to
  * where they were when the CUSUM was last 0 (taken before that step's
  * update: the weights after the step before), by the bank's own record
- * here, and the declaration's hold starts again; no type other than the
- * truth is declared for 900 s. Kalman engine, three rows. */
+ * here, and the declaration's hold starts again; before that, once the
+ * CUSUM passes HSTPF__TRAC_DOUBT, they went back there already and wait;
+ * no type other than the truth is declared for 900 s. Kalman engine, three
+ * rows. */
 static void test_traction_stuck_rollback(void **state)
 {
     static double lq[1000][4];
@@ -827,7 +830,7 @@ static void test_traction_stuck_rollback(void **state)
     truth_t t;
     hstpf_estimate_t e;
     double u_prev = 0.0, u_stuck = 0.0;
-    int k, raised = -1, k0 = -1;
+    int k, raised = -1, k0 = -1, doubt_steps = 0;
     uint16_t l;
     (void)state;
     kalman_start(&t, 300.0 / 3.6, 3);
@@ -846,6 +849,12 @@ static void test_traction_stuck_rollback(void **state)
         }
         lq[k][3] = filt.rf.logq;
         cus[k] = filt.tc.cusum;
+        if (k > 0 && filt.tc.doubt && cus[k - 1] > HSTPF__TRAC_DOUBT) {
+            for (l = 0; l < 4; ++l) { /* in doubt the weights wait */
+                TU_CLOSE(lq[k][l], lq[k - 1][l], 0.0);
+            }
+            ++doubt_steps;
+        }
         if (e.traction_fault && raised < 0) {
             int j;
             raised = k;
@@ -864,7 +873,9 @@ static void test_traction_stuck_rollback(void **state)
         truth_step(&t, u);
         u_prev = u;
     }
-    print_message("fault raised at %d s, weights back to those after %d s\n", raised, k0 - 1);
+    print_message("fault raised at %d s, weights back to those after %d s, %d steps in doubt before\n", raised,
+                  k0 - 1, doubt_steps);
+    assert_true(doubt_steps > 0);
     assert_true(raised > 200 && raised < 300); /* found during the braking */
 }
 

@@ -643,6 +643,7 @@ typedef struct {
     double since_retry_s; /* time since the last retry */
     double logq0[HSTPF_MAX_MODELS + 1]; /* the weights when the CUSUM was last 0 (rows, then the hypothesis) */
     uint8_t release;   /* the train moves although the traction holds it: taken as unknown */
+    uint8_t doubt;     /* the CUSUM past HSTPF__TRAC_DOUBT: the weights wait */
     uint8_t rel_run;   /* released: consecutive fixes at which the train looked at rest */
     double rel_d;      /* held: CUSUM of the fixes' lead over the held position */
 } hstpf_trac_check_t;
