@@ -820,9 +820,8 @@ static void test_long_step(void **state)
  * where they were when the CUSUM was last 0 (taken before that step's
  * update: the weights after the step before), by the bank's own record
  * here, and the declaration's hold starts again; before that, once the
- * CUSUM passes HSTPF__TRAC_DOUBT, they went back there already and wait;
- * no type other than the truth is declared for 900 s. Kalman engine, three
- * rows. */
+ * CUSUM passes HSTPF__TRAC_DOUBT, they wait; no type other than the truth
+ * is declared for 900 s. Kalman engine, three rows. */
 static void test_traction_stuck_rollback(void **state)
 {
     static double lq[1000][4];
