@@ -739,6 +739,11 @@ static void test_consist_change(void **state)
  * same state (to rounding: the bank re-bases positions at every step of
  * its own), and the truth within its 95 % interval. Kalman engine, three
  * rows, braking from 300 km/h. */
+/* a configured profile that is flat: the traction check's shadow then
+ * looks the track up at each part (traction_check.c), and nothing moves */
+static const hstpf_track_seg_t long_step_flat[2] = {{-1000.0, 0.0, 0.0}, {6000.0, 0.0, 0.0}};
+static int long_step_track;
+
 static void long_step_run(hstpf_engine_t engine, int cut, uint64_t seed, hstpf_estimate_t *out, double *s_true,
                           double *v_true, hstpf_model_t *m_out)
 {
@@ -747,6 +752,10 @@ static void long_step_run(hstpf_engine_t engine, int cut, uint64_t seed, hstpf_e
     int k, j;
     double u_prev = 0.0;
     config(&c, engine);
+    if (long_step_track) {
+        c.track = long_step_flat;
+        c.n_track = 2;
+    }
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
     truth_init(&t, "CRH3", 0.0, 300.0 / 3.6, seed);
@@ -810,6 +819,9 @@ static void test_long_step(void **state)
 {
     (void)state;
     long_step(HSTPF_ENGINE_KALMAN, 20, 1e-3);
+    long_step_track = 1;
+    long_step(HSTPF_ENGINE_KALMAN, 5, 1e-3);
+    long_step_track = 0;
     long_step(HSTPF_ENGINE_GRID, 5, 1e-2); /* float cells, re-based at each of the caller's steps */
 }
 
@@ -988,21 +1000,28 @@ static void test_consist_theta(void **state)
  * fixes and a few of its stop, and the standstill is published again). */
 static void test_release_ends(void **state)
 {
+    /* mode 2: mode 0 on a configured track profile that is flat (two
+     * segments of 0 per mille, straight): the same times, step for step */
+    static const hstpf_track_seg_t flat[2] = {{-1000.0, 0.0, 0.0}, {500.0, 0.0, 0.0}};
     hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
-    int k, mode, k_release, k_end, k_rest;
+    int k, mode, k_release, k_end, k_rest, k_release0 = -1, k_end0 = -1;
     (void)state;
-    for (mode = 0; mode < 2; ++mode) {
+    for (mode = 0; mode < 3; ++mode) {
         config(&c, HSTPF_ENGINE_KALMAN);
+        if (mode == 2) {
+            c.track = flat;
+            c.n_track = 2;
+        }
         tu_workspace(&c, 0);
         assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
         truth_init(&t, "CRH3", 0.0, 0.0, 16);
         k_release = k_end = k_rest = -1;
         for (k = 0; k < 300; ++k) {
             /* departs at 60 s; mode 1: brakes to rest from 110 s */
-            const double u_true = k < 60 ? -50.0 : (mode == 0 || k < 110 ? 40.0 : -50.0);
-            const double u_rep = mode == 0 && k >= 80 ? u_true : -50.0;
+            const double u_true = k < 60 ? -50.0 : (mode != 1 || k < 110 ? 40.0 : -50.0);
+            const double u_rep = mode != 1 && k >= 80 ? u_true : -50.0;
             step(1.0, u_rep, truth_fix(&t), 1);
             assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
             check_estimate(&e);
@@ -1017,6 +1036,11 @@ static void test_release_ends(void **state)
         if (mode == 0) {
             assert_int_equal(k_end, 80); /* the traction reported from 80 s moves the train */
             assert_int_equal(e.standstill, 0);
+            k_release0 = k_release;
+            k_end0 = k_end;
+        } else if (mode == 2) {
+            assert_int_equal(k_release, k_release0);
+            assert_int_equal(k_end, k_end0);
         } else {
             assert_true(k_rest > 110 && k_end > k_rest && k_end <= k_rest + 30);
             assert_int_equal(e.standstill, 1);
