@@ -50,6 +50,19 @@ int32_t hstpf_workspace_size(const hstpf_config_t *cfg, size_t *bytes)
     return HSTPF_OK;
 }
 
+/* No type declared, no hold running: status says why (a reset, or a
+ * consist that changed under a declared type). */
+static void clear_declaration(hstpf_t *f, hstpf_status_t status)
+{
+    f->status = status;
+    f->declared = -1;
+    f->leader = -1;
+    f->held_s = 0.0;
+    f->decision_time_s = -1.0;
+    f->fit = HSTPF_FIT_UNKNOWN;
+    f->fit_held_s = 0.0;
+}
+
 static void reset_state(hstpf_t *f)
 {
     uint16_t l;
@@ -67,8 +80,7 @@ static void reset_state(hstpf_t *f)
     f->rf.floored = 0;
     f->rf.rest_s = 0.0;
     hstpf__trac_check_reset(f);
-    f->fit = HSTPF_FIT_UNKNOWN;
-    f->fit_held_s = 0.0;
+    clear_declaration(f, HSTPF_STATUS_UNDECIDED);
     /* the rows, and the slot of the hypothesis' grid model (unused without one) */
     for (l = 0; l <= f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
@@ -90,12 +102,7 @@ static void reset_state(hstpf_t *f)
     hstpf__trac_check_snapshot(f);
     f->origin_m = 0.0;
     f->time_s = 0.0;
-    f->held_s = 0.0;
-    f->decision_time_s = -1.0;
     f->steps = 0;
-    f->leader = -1;
-    f->declared = -1;
-    f->status = HSTPF_STATUS_UNDECIDED;
     f->have_fix = 0;
     f->have_pend = 0;
     f->ever_locked = 0;
@@ -287,15 +294,8 @@ int32_t hstpf_consist_changed(hstpf_t *f)
     if (f->magic != HSTPF_MAGIC) {
         return HSTPF_E_INIT;
     }
-    consist_mix(f, 1.0);
-    hstpf__trac_check_snapshot(f);
-    f->status = f->declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED;
-    f->declared = -1;
-    f->leader = -1;
-    f->held_s = 0.0;
-    f->decision_time_s = -1.0;
-    f->fit = HSTPF_FIT_UNKNOWN;
-    f->fit_held_s = 0.0;
+    consist_mix(f, 1.0); /* the traction check's snapshot too: the prior */
+    clear_declaration(f, f->declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED);
     f->stop_s = 0.0;
     f->mix_pending = 0;
     return HSTPF_OK;
@@ -436,16 +436,23 @@ uint32_t hstpf__substeps(const hstpf_t *f, double dt)
     return r < (double)HSTPF_SUBSTEPS_MAX ? (uint32_t)ceil(r) : HSTPF_SUBSTEPS_MAX;
 }
 
+hstpf__step_t hstpf__step_part(const hstpf_t *f, const hstpf__step_t *st, uint32_t n)
+{
+    hstpf__step_t sub = *st;
+    sub.dt = st->dt / (double)n;
+    sub.scale = (double)(real)sqrt(sub.dt / f->cfg.dt_nominal_s);
+    sub.acc_var = st->acc_var / (double)n;
+    sub.has_y = 0;
+    return sub;
+}
+
 static void engines_step(hstpf_t *f, const hstpf__engine_t *e, const hstpf__step_t *st)
 {
     const uint32_t n = hstpf__substeps(f, st->dt);
     hstpf__step_t sub = *st;
     uint32_t i;
     if (n > 1u) {
-        sub.dt = st->dt / (double)n;
-        sub.scale = (double)(real)sqrt(sub.dt / f->cfg.dt_nominal_s);
-        sub.acc_var = st->acc_var / (double)n;
-        sub.has_y = 0;
+        sub = hstpf__step_part(f, st, n);
         for (i = 1; i < n; ++i) {
             engines_substep(f, e, &sub);
         }

@@ -65,6 +65,8 @@ uint8_t hstpf__off_what(const hstpf_t *f);
 /* How many parts a step of dt is predicted in (bank.c): 1 up to 1.5
  * dt_nominal_s, else ceil(dt / dt_nominal_s), at most HSTPF_SUBSTEPS_MAX. */
 uint32_t hstpf__substeps(const hstpf_t *f, double dt);
+/* One of those n parts of st, without its fix. */
+hstpf__step_t hstpf__step_part(const hstpf_t *f, const hstpf__step_t *st, uint32_t n);
 void hstpf__trac_check_reset(hstpf_t *f);
 /* The weights a raised fault goes back to: taken while the traction fits,
  * and wherever the weights are set anew (init, reset, a consist change). */

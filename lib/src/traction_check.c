@@ -34,6 +34,13 @@ static int checking(const hstpf_t *f)
     return f->cfg.traction_check && f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && hstpf__process_gaussian(&f->cfg);
 }
 
+/* The shadow's traction: none, only what balances the track's force at s
+ * (its W is 0), and a hair so that nothing holds it at rest. */
+static double shadow_xu(const hstpf_t *f, uint16_t *hint, double s)
+{
+    return (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, hint, (real)s) : 0.0) + 1e-3;
+}
+
 /* The shadow placed at the leading row's posterior (every engine publishes
  * its means and variances). */
 static void place(hstpf_t *f)
@@ -118,7 +125,7 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
     }
     /* the shadow does not use the traction: acceleration 0 with accel_unknown_sd */
     st.free_run = 1;
-    st.xu = (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, (real)c->sh.kx[0]) : 0.0) + 1e-3;
+    st.xu = shadow_xu(f, &hint, c->sh.kx[0]);
     st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt * f->cfg.dt_nominal_s;
     {
         /* in the bank's parts (bank.c): in one, a long step's unknown
@@ -127,16 +134,11 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
          * review) */
         const uint32_t n = hstpf__substeps(f, st.dt);
         if (n > 1u) {
-            hstpf__step_t sub = st;
+            hstpf__step_t sub = hstpf__step_part(f, &st, n);
             uint32_t i;
-            sub.dt = st.dt / (double)n;
-            sub.scale = (double)(real)sqrt(sub.dt / f->cfg.dt_nominal_s);
-            sub.acc_var = st.acc_var / (double)n;
-            sub.has_y = 0;
             for (i = 1; i < n; ++i) {
                 (void)hstpf__kalman_step(f, &c->sh, &sub, &held, &floored);
-                /* the track's force where this part ends, as the bank's models have it */
-                sub.xu = (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, (real)c->sh.kx[0]) : 0.0) + 1e-3;
+                sub.xu = shadow_xu(f, &hint, c->sh.kx[0]); /* the track where this part ends */
             }
             sub.has_y = st.has_y;
             st = sub;
