@@ -76,6 +76,12 @@ for s in tracsign gain-20; do
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"
 done
+# steps in the fixes' reference (a GNSS bias, lone outliers), with cfg.fix_step and without it
+for s in fixbias20 spikes20 stopstep12 stopstep-12; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-fix-step | tee "$out/$s-nostep.txt"
+done
 fi
 if section offtable; then
 echo "== trains not on Table 1: defaults (the continuous hypothesis on), then without it"

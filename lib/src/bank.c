@@ -120,6 +120,8 @@ static void reset_state(hstpf_t *f)
     f->lost_run = 0;
     f->outliers = 0;
     f->reacquired = 0;
+    memset(&f->fs, 0, sizeof f->fs);
+    f->fs.side = 2;
 }
 
 /* The quantile part of spec's tables into q, built in de's place (its
@@ -501,7 +503,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         return HSTPF_OK;
     }
     if (has_y && f->cfg.gate_m > 0.0 &&
-        fabs(in->position_m - f->origin_m - hstpf__blended_position(f, in->dt_s)) > f->cfg.gate_m) {
+        (fabs(in->position_m - f->origin_m - hstpf__blended_position(f, in->dt_s)) > f->cfg.gate_m
+             ? (f->fs.pend = 0, 1)
+             : f->cfg.fix_step && hstpf__fix_step(f, in->position_m, in->dt_s))) {
         if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
             ++f->outliers;
             f->outlier_run = (uint16_t)(f->outlier_run + (f->outlier_run < UINT16_MAX)); /* saturates: 0 means valid */

@@ -36,6 +36,11 @@ void hstpf__rebase(hstpf_t *f, double rel);
 void hstpf__models_reacquire(hstpf_t *f, real yr);
 void hstpf__nonfinite_reset(hstpf_t *f);
 
+/* fix_step.c: whether fix y (absolute m) at the end of a step of dt is
+ * held as a possible step in the fixes' reference (1), or used (0; the
+ * origin moved first when it completes one). */
+int hstpf__fix_step(hstpf_t *f, double y, double dt);
+
 /* declare.c */
 void hstpf__update_declaration(hstpf_t *f, double dt, int evidence);
 uint8_t hstpf__off_what(const hstpf_t *f);

@@ -47,6 +47,7 @@ int32_t hstpf_config_default(hstpf_config_t *cfg)
     cfg->grid_speed_lattice = 1; /* docs/grid.md, "The speed lattice" */
     cfg->grid_rows = 3; /* docs/grid.md, "Rows on the grid" */
     cfg->traction_check = 1; /* docs/model.md, "A traction that cannot be right" */
+    cfg->fix_step = 1;       /* docs/model.md, "A step in the fixes" */
     return HSTPF_OK;
 }
 
@@ -167,6 +168,9 @@ static int32_t check_enums(const hstpf_config_t *c, const char **field)
     }
     if (c->traction_check > 1u) {
         return fail(field, "traction_check", HSTPF_E_CONFIG);
+    }
+    if (c->fix_step > 1u) {
+        return fail(field, "fix_step", HSTPF_E_CONFIG);
     }
     if (c->grid_speed_lattice > 1u) {
         return fail(field, "grid_speed_lattice", HSTPF_E_CONFIG);

@@ -299,6 +299,7 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     out->decision_time_s = f->decision_time_s;
     out->outliers = f->outliers;
     out->reacquired = f->reacquired;
+    out->fix_steps = f->fs.steps;
     out->acquisitions = f->acquisitions;
     out->backward = f->backward;
     out->nonfinite_resets = f->nonfinite_resets;

@@ -212,6 +212,8 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->arrival_s = 0.0;
     f->lost_run = 0;
     f->pr.active = 0;
+    f->fs.pend = 0;
+    f->fs.side = 2;
     f->tc.placed = 0; /* placed again at the new lock; a fault stands */
 }
 

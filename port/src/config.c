@@ -88,6 +88,7 @@ void hstpfd_config_default(hstpfd_config_t *c)
     c->gate_m = fc.gate_m;
     c->accel_unknown_sd = fc.accel_unknown_sd;
     c->traction_check = fc.traction_check;
+    c->fix_step = fc.fix_step;
     c->consist_change_p = fc.consist_change_p;
     c->mass_t = 500.0;
     c->sched.step_period_s = 1.0;
@@ -144,5 +145,6 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->gate_m = c->gate_m;
     fc->accel_unknown_sd = c->accel_unknown_sd;
     fc->traction_check = c->traction_check;
+    fc->fix_step = c->fix_step;
     fc->consist_change_p = c->consist_change_p;
 }

@@ -50,6 +50,7 @@ typedef struct {
     double gate_m;
     double accel_unknown_sd; /* hstpf_config_t's: the acceleration's sd while the traction is stale */
     uint8_t traction_check;  /* hstpf_config_t's */
+    uint8_t fix_step;        /* hstpf_config_t's */
     double consist_change_p; /* hstpf_config_t's */
     /* train and inputs */
     double mass_t;

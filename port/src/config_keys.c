@@ -43,6 +43,8 @@ const hstpfd__key_t hstpfd__keys[] = {
      "while the traction is stale: the train's acceleration taken as 0 with this sd, m/s^2"},
     {"traction_check", K_BOOL, OFF(traction_check), 0, 0, 0,
      "1 = take the traction as unknown while it explains the fixes worse than none (HealthRx.TractImplausible)"},
+    {"fix_step", K_BOOL, OFF(fix_step), 0, 0, 0,
+     "1 = a step in the positions' reference (a GNSS bias, a balise correction) moves the position, not the speed"},
     {"consist_change_p", K_DBL, OFF(consist_change_p), 0, 0.5, 0,
      "probability that the consist changed during a standstill of 3 min or more (the Consist frame says it for sure)"},
     {"mass_t", K_DBL, OFF(mass_t), 0, 1e5, HSTPFD_LO_OPEN, "train mass, t (traction kN -> N/kN)"},

@@ -722,7 +722,12 @@ static void test_consist_change(void **state)
     assert_int_equal(after.declared, -1);
     assert_int_equal(after.status, e.declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED);
     assert_int_equal(after.valid, e.valid);
-    step(1.0, 30.0, e.position_m + 40.0, 1); /* and it runs on */
+    {
+        /* and it runs on (a fix 40 m off is held as a possible step) */
+        const hstpf_input_t in = tu_input(1.0, 30.0, e.position_m + 40.0, 1);
+        const int32_t rc = hstpf_step(&filt, &in);
+        assert_true(rc == HSTPF_OK || rc == HSTPF_E_OUTLIER);
+    }
     assert_int_equal(hstpf_estimate(&filt, &after), HSTPF_OK);
     check_estimate(&after);
     assert_int_equal(hstpf_consist_changed(NULL), HSTPF_E_NULL);
@@ -1049,6 +1054,74 @@ static void test_release_ends(void **state)
     }
 }
 
+/* A step in the fixes' reference (a GNSS bias that changes, a balise
+ * correction): at 300 km/h the fixes move by +25 m (11 sd of the fix
+ * noise) from 120 s on and stay there; or only the fix at 120 s does (a
+ * lone outlier); or nothing happens. Expected by hand: the first fix
+ * beyond the reach is held (HSTPF_E_OUTLIER, the estimate not valid); a
+ * step's second fix moves the position by about 25 m (their mean offset:
+ * sd sqrt(5 / 2) = 1.6 m, so within 6 m) and the speed by no more than the
+ * noise of one fix would (0.5 m/s); then the speed stays within 4 of its
+ * sd of the truth. Without the rule the step moved the speed by 3.4-5.4
+ * m/s (a review's harness: 8-12 sd). A lone outlier moves nothing. Over
+ * 600 clean fixes a hold has probability 600 x 1.5e-5 = 0.01 under the
+ * model: none is asserted. */
+static void fix_step_run(hstpf_engine_t engine, int mode, uint64_t seed)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e, prev;
+    int k;
+    memset(&prev, 0, sizeof prev);
+    config(&c, engine);
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 0.0, 300.0 / 3.6, seed);
+    for (k = 0; k < 600; ++k) {
+        const double u = hstpf_resistance(&t.th, t.v);
+        const double off = (mode == 1 && k >= 120) || (mode == 2 && k == 120) ? 25.0 : 0.0;
+        const hstpf_input_t in = tu_input(1.0, u, truth_fix(&t) + off, 1);
+        const int32_t rc = hstpf_step(&filt, &in);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (mode != 0 && k == 120) {
+            assert_int_equal(rc, HSTPF_E_OUTLIER);
+            assert_int_equal(e.valid, 0);
+        } else {
+            assert_int_equal(rc, HSTPF_OK);
+        }
+        if (mode == 1 && k == 121) {
+            assert_int_equal(e.fix_steps, 1);
+            assert_int_equal(e.valid, 1);
+            TU_CLOSE(e.position_m - (prev.position_m + (double)prev.speed_mps), 25.0, 6.0);
+            TU_CLOSE(e.speed_mps, prev.speed_mps, 0.5);
+        }
+        if (k > 60 && k != 120) {
+            assert_true(fabs((double)e.speed_mps - t.v) <= 4.0 * (double)e.speed_sd_mps);
+            assert_true(e.valid);
+        }
+        prev = e;
+        truth_step(&t, u);
+    }
+    assert_int_equal(e.fix_steps, mode == 1 ? 1u : 0u);
+    assert_int_equal(e.outliers, mode == 0 ? 0u : 1u);
+}
+
+static void test_fix_step(void **state)
+{
+    int mode;
+    uint64_t seed;
+    (void)state;
+    for (seed = 1; seed <= 5; ++seed) {
+        for (mode = 0; mode < 3; ++mode) {
+            fix_step_run(HSTPF_ENGINE_KALMAN, mode, seed);
+        }
+    }
+    for (mode = 0; mode < 3; ++mode) {
+        fix_step_run(HSTPF_ENGINE_GRID, mode, 1);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1061,6 +1134,7 @@ int main(void)
         cmocka_unit_test(test_weak_hold),             cmocka_unit_test(test_consist_change),
         cmocka_unit_test(test_long_step),             cmocka_unit_test(test_traction_stuck_rollback),
         cmocka_unit_test(test_consist_theta),         cmocka_unit_test(test_release_ends),
+        cmocka_unit_test(test_fix_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

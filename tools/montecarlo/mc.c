@@ -61,6 +61,10 @@ typedef struct {
     int step_every;
     /* a traction signal stuck at its value at stuck_at_s for stuck_s (0 = none) */
     double stuck_at_s, stuck_s;
+    /* the fixes (not the train) off by fix_off_m from fix_off_at_s for
+     * fix_off_s, again every fix_off_every_s with the sign alternating (0 =
+     * once): a GNSS bias that steps, a lone outlier */
+    double fix_off_m, fix_off_at_s, fix_off_s, fix_off_every_s;
 } scenario_t;
 
 typedef struct timetable {
@@ -83,7 +87,7 @@ typedef struct {
     double v_min_rest;          /* lowest speed estimate while the truth stood */
     double pe10;                /* |position error| 10 s after the event (first fix, clock step) */
     double pe_max_after;        /* max |position error| after that */
-    uint32_t outliers, reacquired, acquisitions;
+    uint32_t outliers, reacquired, acquisitions, fix_steps;
     long cover_p, cover_v, n_cover; /* steps inside the 95 % intervals, steps counted */
     long assert_fail;           /* steps where declared, status and theta disagree */
     double outage_s;            /* outage length drawn for this run, s */
@@ -625,6 +629,13 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         smp.s += ref_off; /* the truth and its fixes on the reference the unit sends */
         smp.y += ref_off;
         in.position_m += ref_off;
+        if (w->sc->fix_off_m != 0.0 && smp.t >= w->sc->fix_off_at_s) {
+            const double per = w->sc->fix_off_every_s, since = smp.t - w->sc->fix_off_at_s;
+            const double n = per > 0.0 ? floor(since / per) : 0.0, in_ep = since - n * per;
+            if (in_ep < w->sc->fix_off_s) {
+                in.position_m += fmod(n, 2.0) == 0.0 ? w->sc->fix_off_m : -w->sc->fix_off_m;
+            }
+        }
         if (w->sc->outage && out_start < 0.0 && sim.leg == OUTAGE_LEG &&
             sim.phase == HSTPF_SIM_RUN && smp.t - sim.phase_t0 >= OUTAGE_AFTER_S) {
             out_start = smp.t;
@@ -866,6 +877,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     r->pos_bias = sb_p / n_after;
     jr->n_stops += at_rest == 2 && jr->n_stops < MAX_STOPS; /* ended standing */
     jr->outliers = est.outliers;
+    jr->fix_steps = est.fix_steps;
     jr->reacquired = est.reacquired;
     jr->acquisitions = est.acquisitions;
     r->floor_hits_true = tq >= 0 ? est.model[tq].floor_hits : 0u;
@@ -1079,6 +1091,13 @@ static const scenario_t scenarios[] = {
     {.name = "late10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 11.0},
     /* the same for 60 s: a traction signal stuck at the holding brake */
     {.name = "late60", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 61.0},
+    /* the fixes step by +20 m on the line at 300 km/h for 300 s (a GNSS bias); one fix in 150 s
+     * 20 m off, the sign alternating (lone outliers) */
+    {.name = "fixbias20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},
+    /* the same at the third station (at rest from about 1 450 to 1 570 s): +-12 m for 60 s from 1 480 s */
+    {.name = "stopstep12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
+    {.name = "stopstep-12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = -12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
+    {.name = "spikes20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = 150.0, .fix_off_s = 0.5, .fix_off_every_s = 150.0},
     {.name = "tracsign", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .sign_flip_at_s = 1010.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
@@ -1111,6 +1130,7 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     double *td_all = malloc(sizeof(double) * (size_t)all); /* when the truth was declared */
     int n_tv_all = 0, n_pe_all = 0, n_td_all = 0, n_np = 0, n_td_np = 0, j, i, k;
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
+    long t_fs = 0;
     long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
     long t_still = 0, t_vbad = 0, t_tf = 0;
     int n_still = 0, n_vbad = 0, n_tf = 0;
@@ -1162,6 +1182,7 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             }
             pemax = q->pe_max_after > pemax ? q->pe_max_after : pemax;
             outl += q->outliers;
+            t_fs += q->fix_steps;
             reacq += q->reacquired;
             acq += q->acquisitions;
             cp += q->cover_p;
@@ -1246,12 +1267,13 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
                         "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g,"
-                        "\"still_moving\":%ld,\"v_bad\":%ld,\"trac_fault\":%ld,\"trac_cusum_max\":%.4g",
+                        "\"still_moving\":%ld,\"v_bad\":%ld,\"trac_fault\":%ld,\"trac_cusum_max\":%.4g,\"fix_steps\":%u",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
-                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad, q->trac_fault, q->trac_cusum_max);
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad, q->trac_fault, q->trac_cusum_max,
+                        (unsigned)q->fix_steps);
                 if (w->sc->restart_after_s > 0.0) {
                     fprintf(jf, ",\"restart_t\":%.0f,\"revalid_s\":%.0f,\"restart_valid\":%.4f,\"restart_pe_max\":%.4g",
                             q->restart_t, q->revalid_s,
@@ -1278,11 +1300,12 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            "pairs ending outside the pair %ld of %ld; TV across a stop median %.4f max %.4f; "
            "speed at rest min %+.3f m/s; W(v) error outside the pairs: worst truth mean %.2f%%, max %.2f%%; "
            "position error 10 s after the event median %.2f m max %.2f m, later max %.1f m; outliers %ld, "
+           "steps in the fixes %ld, "
            "re-acquisitions (gated) %ld, acquisitions %.2f per run; 95%% coverage position %.1f%% speed "
            "%.1f%%; declared/status/theta disagreements %ld\n",
            all, t_false, 100.0 * (double)t_false / all, t_rest, t_out, t_pairbad, t_pairruns,
            pct(tv_all, n_tv_all, 0.5), pct(tv_all, n_tv_all, 1.0), t_vmin, 100.0 * t_wmean, 100.0 * t_wmax,
-           pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_reacq, t_acq / all,
+           pct(pe_all, n_pe_all, 0.5), pct(pe_all, n_pe_all, 1.0), t_pemax, t_outl, t_fs, t_reacq, t_acq / all,
            100.0 * (double)t_cp / (double)t_n, 100.0 * (double)t_cv / (double)t_n, t_assert);
     printf("standstill published while the train moved: %ld steps in %d runs; valid steps with the speed more than "
            "5 sd and 0.3 m/s off: %ld in %d runs; the traction taken for wrong (traction_fault) at %ld steps in %d "
@@ -1607,6 +1630,7 @@ static void usage_to(FILE *out)
             "  [--gauss-e]  (the filter told a Gaussian of the position noise's mean and sd, not its density)\n"
             "  [--gap-hold]  (tracgap scenarios: the gap feeds the last traction, as hstpfd did before, not 'unknown')\n"
             "  [--no-traction-check]  (cfg.traction_check = 0: the traction always believed)\n"
+            "  [--no-fix-step]  (cfg.fix_step = 0: every fix within the gate used, a step in them too)\n"
             "  [--oracle]  (a second bank on the same inputs: off the table the truth's own theta beside its 4 nearest\n"
             "              rows, on it the truth's row beside 8 trains 10 %% from it; when the data tell them apart.\n"
             "              Not a filter setting)\n"
@@ -1872,6 +1896,10 @@ int main(int argc, char **argv)
         }
         if (!strcmp(a, "--gauss-e")) {
             st.gauss_e = 1;
+            continue;
+        }
+        if (!strcmp(a, "--no-fix-step")) {
+            st.base.fix_step = 0;
             continue;
         }
         if (!strcmp(a, "--no-traction-check")) {

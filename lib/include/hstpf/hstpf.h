@@ -288,7 +288,8 @@ typedef struct {
      *  braking). */
     double accel_unknown_sd;
     /** Measurements farther than this from the predicted position are
-     *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000). */
+     *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000).
+     *  0 also turns fix_step off. */
     double gate_m;
     /** After this many consecutive gated measurements, or measurements
      *  beyond the likelihood floor of every weighted hypothesis, the next
@@ -366,6 +367,17 @@ typedef struct {
      *  against), nor non-Gaussian process noise (a Gaussian filter weighed
      *  against exact densities never wins). */
     uint8_t traction_check;
+    /** 1 (default): a step in the fixes' reference (a GNSS bias that
+     *  changes, a balise or map-matching correction) moves the position,
+     *  not the speed: a fix beyond the fix noise's 2^-17 quantiles (a
+     *  Gaussian's 4.3 sd, with the prediction's spread) right after one
+     *  that fitted is held (HSTPF_E_OUTLIER, not valid), and the next one
+     *  beyond its 2^-11 quantiles on the same side at about the same
+     *  offset moves the position by their mean
+     *  (hstpf_estimate_t.fix_steps). Not at a standstill, across a long
+     *  step, or with gate_m 0. 0: every fix within gate_m is used
+     *  (docs/model.md, "A step in the fixes"). */
+    uint8_t fix_step;
     /** Grid engine under Gaussian process noise (the heavy-tailed fixes
      *  of a GNSS receiver): how many rows are stepped on the grid, those
      *  with the largest weights, [0, HSTPF_MAX_MODELS] (3; 0: every row).
@@ -504,8 +516,13 @@ typedef struct {
     int16_t declared;       /**< declared model index, -1 if none */
     hstpf_status_t status;  /**< declaration status */
     double decision_time_s; /**< time of the latest declaration, -1 if none */
-    uint32_t outliers;      /**< measurements rejected by the gate */
+    /** measurements not used: beyond the gate, or held as a possible
+     *  step's first fix (cfg.fix_step) */
+    uint32_t outliers;
     uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
+    /** steps in the fixes' reference taken: the position moved by them,
+     *  the speed did not (cfg.fix_step) */
+    uint32_t fix_steps;
     uint32_t acquisitions;  /**< lock (re)acquired from fixes: start, outage, gated run, time step */
     uint32_t nonfinite_resets; /**< times the filter went non-finite and was re-initialised */
     uint32_t backward;      /**< fix pairs refused, locks dropped, and locks taken on
@@ -670,6 +687,14 @@ typedef struct {
     uint8_t no_timer; /* this one ends only by coming forward (taken while timed) */
 } hstpf_probation_t;
 
+/* A step in the fixes' reference (fix_step.c). */
+typedef struct {
+    double d;        /* the held fix less the prediction, m */
+    uint32_t steps;  /* steps taken */
+    uint8_t pend;    /* the last fix was held as a possible step's first */
+    int8_t side;     /* where the last fix used lay: -1 / 1 beyond the prediction's reach, 0 within, 2 unknown */
+} hstpf_fix_step_t;
+
 typedef struct {
     uint32_t magic;
     hstpf_config_t cfg;              /* models/track pointers cleared */
@@ -711,6 +736,7 @@ typedef struct {
     uint32_t backward;               /* fix pairs refused, locks dropped or taken on probation: hstpf_estimate_t */
     double top_m;                    /* furthest posterior position on a fix, absolute m (-inf: none) */
     hstpf_probation_t pr;            /* a lock taken behind top_m */
+    hstpf_fix_step_t fs;
     hstpf_refine_t rf;
     hstpf_trac_check_t tc;
     double fit_held_s;               /* time the continuous hypothesis held q > thr */
@@ -819,7 +845,8 @@ int32_t hstpf_reacquire(hstpf_t *f);
  *   traction or position NaN/Inf); HSTPF_E_DT; HSTPF_E_RANGE (|traction| >
  *   HSTPF_U_MAX, |position| > HSTPF_POS_MAX_M): on these *f is unchanged.
  *   HSTPF_E_OUTLIER (position farther than gate_m from the blended
- *   prediction): the step WAS taken, as a prediction without the fix; the
+ *   prediction, or held as a possible step in the fixes' reference, see
+ *   cfg.fix_step): the step WAS taken, as a prediction without the fix; the
  *   outlier counters advance and the fix is kept as a possible first fix
  *   of a re-acquisition (after reacquire_after in a row).
  * Cost: O(n_models x n_particles): per particle two RNG draws and table

@@ -1,0 +1,129 @@
+/* A step in the fixes' reference: a GNSS bias that changes (a satellite
+ * set, a receiver's mode), a map-matching or balise correction. The fixes
+ * jump by metres from one epoch to the next while the train does not.
+ * Moving, every filter took the jump for speed: a 20 m step gave a speed
+ * 4 m/s off at 8-12 sd, published valid (a review's harness). At rest,
+ * the held models could not follow it, and the traction check blamed the
+ * traction for minutes (hstpf-mc --scenario stopstep-12).
+ *
+ * A fix beyond the reach of the fix noise (its 2^-17 quantiles, a
+ * Gaussian's 4.3 sd, with the prediction's spread) is held: not used, the
+ * estimate not valid. When the next fix lies on the same side beyond the
+ * 2^-11 quantiles (3.3 sd) at about the same offset, the two are a step:
+ * the position moves by their mean offset and the speed does not.
+ * Otherwise the held fix was a lone outlier. Only a jump is held: the fix
+ * before it was not beyond the 2^-8 quantiles (2.7 sd) on the same side,
+ * so that dynamics that are wrong (a traction stuck, a train that rolls
+ * while held), whose innovations grow a little each step, are not taken
+ * for steps. A jump beyond STEP_RANGES of the noise's 2^-10 range is not a
+ * step: a reference that restarted, fixes that run backwards, a train
+ * lost (lock.c's rules). */
+#include <math.h>
+
+#include "bank.h"
+#include "dist_impl.h"
+#include "refine.h"
+#include "track.h"
+
+/* tail tables' nodes F^-1(2^(k - 32)) and a Gaussian's sd there, by
+ * which the prediction's spread is scaled alike */
+#define HOLD_TAIL 15 /* 2^-17, 7.6e-6: 4.33 sd */
+#define HOLD_Z 4.33
+#define STEP_TAIL 21 /* 2^-11, 4.9e-4: 3.30 sd */
+#define STEP_Z 3.30
+#define FIT_TAIL 24 /* 2^-8, 3.9e-3: 2.66 sd */
+#define FIT_Z 2.66
+#define RANGE_TAIL 22 /* 2^-10: the range of lock.c's rules */
+#define STEP_RANGES 4.0 /* a step is at most this many such ranges (Case 1: 59 m) */
+#define STEP_ACC 1.0 /* m/s^2 the blend's s + T v leaves out over a step, at most */
+typedef char hstpf__step_tail_fits[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN && HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL ? 1 : -1];
+
+/* The blend's position at the step's end, relative to the origin, and a
+ * bound on its sd: each hypothesis' (sd_s + T sd_v), the spread between
+ * them, and what the acceleration adds. */
+static void predict(const hstpf_t *f, double dt, double *s, double *sd)
+{
+    double wb[HSTPF_MAX_MODELS + 1], ps[HSTPF_MAX_MODELS + 1], pv[HSTPF_MAX_MODELS + 1], mean = 0.0, var = 0.0;
+    uint16_t l;
+    const uint16_t n = f->cfg.n_models;
+    hstpf__blend_weights(f, wb);
+    for (l = 0; l < n; ++l) {
+        const hstpf_model_t *m = &f->m[l];
+        const double b = sqrt((double)m->s_var) + dt * sqrt((double)m->v_var);
+        ps[l] = (double)m->s_mean + dt * (double)m->v_mean;
+        pv[l] = b * b;
+    }
+    if (f->rf.active) {
+        double rs, rv, pss, pvv, b;
+        hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
+        b = sqrt(pss) + dt * sqrt(pvv);
+        ps[n] = rs + dt * rv;
+        pv[n] = b * b;
+    } else {
+        wb[n] = 0.0;
+        ps[n] = pv[n] = 0.0;
+    }
+    for (l = 0; l <= n; ++l) {
+        mean += wb[l] * ps[l];
+    }
+    for (l = 0; l <= n; ++l) {
+        var += wb[l] * (pv[l] + (ps[l] - mean) * (ps[l] - mean));
+    }
+    *s = mean;
+    *sd = sqrt(var) + 0.5 * STEP_ACC * dt * dt;
+}
+
+/* d (the fix less the prediction) beyond the reach: the noise's tail
+ * quantile k from its median and z prediction sd, root-sum-square (a
+ * Gaussian's z sd of the two together). -1 below, 1 above, 0 within. */
+static int beyond(const hstpf_t *f, double d, double sd, int k, double z)
+{
+    const hstpf_dist_quantiles_t *q = &f->de.qt;
+    const double med = (double)hstpf__dist_sample(q, 0x80000000u);
+    const double hi = (double)q->tail_hi[k] - med, lo = med - (double)q->tail_lo[k];
+    const double p2 = z * z * sd * sd;
+    d -= med;
+    if (d > 0.0) {
+        return d * d > hi * hi + p2 ? 1 : 0;
+    }
+    return d * d > lo * lo + p2 ? -1 : 0;
+}
+
+int hstpf__fix_step(hstpf_t *f, double y, double dt)
+{
+    double s, sd, d;
+    const int pend = f->fs.pend, side = f->fs.side;
+    int out;
+    f->fs.pend = 0;
+    f->fs.side = 2; /* unknown: no hold at the next fix */
+    /* not while the lock is new, doubted or lost, nor across a long step
+     * (its prediction leaves out T^2 a / 2) */
+    if (f->pr.active || f->pr.timed || f->lost_run != 0u || hstpf__substeps(f, dt) > 1u ||
+        (f->outlier_run != 0u && !pend)) {
+        return 0;
+    }
+    predict(f, dt, &s, &sd);
+    d = y - f->origin_m - s;
+    if (pend && beyond(f, d, sd, STEP_TAIL, STEP_Z) == beyond(f, f->fs.d, 0.0, STEP_TAIL, 0.0) &&
+        fabs(d - f->fs.d) <= (double)(f->de.qt.tail_hi[STEP_TAIL] - f->de.qt.tail_lo[STEP_TAIL])) {
+        /* the second: the reference stepped by their mean offset (less
+         * the noise's mean, which the filters expect in every fix) */
+        const double step = 0.5 * (d + f->fs.d) - f->noise_mom[4];
+        f->origin_m += step;
+        f->top_m += step;
+        hstpf__track_rebase(f);
+        ++f->fs.steps;
+        return 0;
+    }
+    out = beyond(f, d, sd, HOLD_TAIL, HOLD_Z);
+    if (out == 0 || fabs(d) > STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]) || (!pend && (side == 2 || side == out))) {
+        /* a held fix before this one was a lone outlier; one beyond it
+         * that is not its step is held in its turn (a run of them
+         * re-acquires: reacquire_after) */
+        f->fs.side = (int8_t)beyond(f, d, sd, FIT_TAIL, FIT_Z);
+        return 0;
+    }
+    f->fs.pend = 1;
+    f->fs.d = d;
+    return 1;
+}
