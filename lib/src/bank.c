@@ -78,7 +78,7 @@ static void reset_state(hstpf_t *f)
     f->rf.loglik = 0.0;
     f->rf.held = 0;
     f->rf.floored = 0;
-    f->rf.rest_s = 0.0;
+    memset(&f->rf.rest, 0, sizeof f->rf.rest);
     hstpf__trac_check_reset(f);
     clear_declaration(f, HSTPF_STATUS_UNDECIDED);
     /* the rows, and the slot of the hypothesis' grid model (unused without one) */
@@ -90,7 +90,7 @@ static void reset_state(hstpf_t *f)
         memset(m->kx, 0, sizeof m->kx);
         memset(m->kp, 0, sizeof m->kp);
         m->kll = 0.0;
-        m->rest_s = 0.0;
+        memset(&m->rest, 0, sizeof m->rest);
         m->held = 0;
         m->k_placed = 0;
         m->reacquired = 0;
@@ -502,10 +502,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         hstpf__update_declaration(f, in->dt_s, 0);
         return HSTPF_OK;
     }
-    if (has_y && f->cfg.gate_m > 0.0 &&
-        (fabs(in->position_m - f->origin_m - hstpf__blended_position(f, in->dt_s)) > f->cfg.gate_m
-             ? (f->fs.pend = 0, 1)
-             : f->cfg.fix_step && hstpf__fix_step(f, in->position_m, in->dt_s))) {
+    if (has_y && f->cfg.gate_m > 0.0 && hstpf__fix_gate(f, in->position_m, in->dt_s)) {
         if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
             ++f->outliers;
             f->outlier_run = (uint16_t)(f->outlier_run + (f->outlier_run < UINT16_MAX)); /* saturates: 0 means valid */

@@ -37,9 +37,10 @@ void hstpf__models_reacquire(hstpf_t *f, real yr);
 void hstpf__nonfinite_reset(hstpf_t *f);
 
 /* fix_step.c: whether fix y (absolute m) at the end of a step of dt is
- * held as a possible step in the fixes' reference (1), or used (0; the
- * origin moved first when it completes one). */
-int hstpf__fix_step(hstpf_t *f, double y, double dt);
+ * not used (1): farther than gate_m from the blend's prediction, or held
+ * as a possible step in the fixes' reference (cfg.fix_step); 0: used (the
+ * origin moved first when it completes a step). */
+int hstpf__fix_gate(hstpf_t *f, double y, double dt);
 
 /* declare.c */
 void hstpf__update_declaration(hstpf_t *f, double dt, int evidence);

@@ -55,7 +55,7 @@ void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
         m->kp[2] = c->init_speed_sd * c->init_speed_sd;
     }
     m->kx[1] = m->kx[1] > 0.0 ? m->kx[1] : 0.0;
-    m->rest_s = 0.0;
+    memset(&m->rest, 0, sizeof m->rest);
 }
 
 static void place_one(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q)
@@ -89,7 +89,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
     const double sc2 = scale * scale;
     const double a = accel(f, m, st->xu, s, v);
     const double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v);
-    double ns, nv, loglik = 0.0, qss, qsv, qvv;
+    double ns, nv, loglik = 0.0, qss, qsv, qvv, s_pred, p_pred;
     *held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);
     *floored = 0;
     if (*held) {
@@ -113,11 +113,13 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         p[1] = p[2] = fvv * (psv + dt * pvv);
         p[3] = fvv * fvv * pvv;
         *held = hstpf__kalman_rest_speed(x, p, 2, vd, st->free_run, scale * nm[2], sc2 * nm[3] * nm[3], st->acc_var, dt,
-                                         &m->rest_s);
+                                         &m->rest);
         nv = x[1];
         qsv = p[1];
         qvv = p[3];
     }
+    s_pred = ns;
+    p_pred = qss;
     if (st->has_y && hstpf__fix_exact(f)) {
         hstpf__fix_t fx;
         const double b = qss > 0.0 ? qsv / qss : 0.0; /* the speed's regression on the position */
@@ -154,6 +156,9 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qss -= ks * qss;
         qvv = qvv > 0.0 ? qvv : 0.0;
         /* qss (1 - qss / sy) with qss <= sy: never below 0, even rounded */
+    }
+    if (st->has_y) {
+        hstpf__settle_fix(f, &m->rest, s_pred, p_pred, st->yr);
     }
     m->kx[0] = ns;
     m->kx[1] = nv > 0.0 ? nv : 0.0; /* a train never reverses */

@@ -38,50 +38,46 @@
 #define STEP_ACC 1.0 /* m/s^2 the blend's s + T v leaves out over a step, at most */
 typedef char hstpf__step_tail_fits[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN && HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL ? 1 : -1];
 
-/* The blend's position at the step's end, relative to the origin, and a
- * bound on its sd: each hypothesis' (sd_s + T sd_v), the spread between
- * them, and what the acceleration adds. */
-static void predict(const hstpf_t *f, double dt, double *s, double *sd)
+/* The blend's position at the step's end, relative to the origin (as
+ * hstpf__blended_position), and a bound on its variance: each
+ * hypothesis' 2 (pss + T^2 pvv), which (sd_s + T sd_v)^2 never exceeds,
+ * the spread between them, and (STEP_ACC T^2 / 2)^2. No sqrt: the M4F's
+ * double is soft-float. */
+static void predict(const hstpf_t *f, double dt, double *s, double *var)
 {
-    double wb[HSTPF_MAX_MODELS + 1], ps[HSTPF_MAX_MODELS + 1], pv[HSTPF_MAX_MODELS + 1], mean = 0.0, var = 0.0;
+    double wb[HSTPF_MAX_MODELS + 1], m1 = 0.0, m2 = 0.0, pv = 0.0, ps;
+    const double acc = 0.5 * STEP_ACC * dt * dt;
     uint16_t l;
-    const uint16_t n = f->cfg.n_models;
     hstpf__blend_weights(f, wb);
-    for (l = 0; l < n; ++l) {
+    for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        const double b = sqrt((double)m->s_var) + dt * sqrt((double)m->v_var);
-        ps[l] = (double)m->s_mean + dt * (double)m->v_mean;
-        pv[l] = b * b;
+        ps = (double)m->s_mean + dt * (double)m->v_mean;
+        m1 += wb[l] * ps;
+        m2 += wb[l] * ps * ps;
+        pv += wb[l] * 2.0 * ((double)m->s_var + dt * dt * (double)m->v_var);
     }
     if (f->rf.active) {
-        double rs, rv, pss, pvv, b;
+        double rs, rv, pss, pvv;
+        const double w = wb[f->cfg.n_models];
         hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
-        b = sqrt(pss) + dt * sqrt(pvv);
-        ps[n] = rs + dt * rv;
-        pv[n] = b * b;
-    } else {
-        wb[n] = 0.0;
-        ps[n] = pv[n] = 0.0;
+        ps = rs + dt * rv;
+        m1 += w * ps;
+        m2 += w * ps * ps;
+        pv += w * 2.0 * (pss + dt * dt * pvv);
     }
-    for (l = 0; l <= n; ++l) {
-        mean += wb[l] * ps[l];
-    }
-    for (l = 0; l <= n; ++l) {
-        var += wb[l] * (pv[l] + (ps[l] - mean) * (ps[l] - mean));
-    }
-    *s = mean;
-    *sd = sqrt(var) + 0.5 * STEP_ACC * dt * dt;
+    *s = m1;
+    *var = pv + (m2 > m1 * m1 ? m2 - m1 * m1 : 0.0) + acc * acc;
 }
 
 /* d (the fix less the prediction) beyond the reach: the noise's tail
  * quantile k from its median and z prediction sd, root-sum-square (a
  * Gaussian's z sd of the two together). -1 below, 1 above, 0 within. */
-static int beyond(const hstpf_t *f, double d, double sd, int k, double z)
+static int beyond(const hstpf_t *f, double d, double var, int k, double z)
 {
     const hstpf_dist_quantiles_t *q = &f->de.qt;
     const double med = (double)hstpf__dist_sample(q, 0x80000000u);
     const double hi = (double)q->tail_hi[k] - med, lo = med - (double)q->tail_lo[k];
-    const double p2 = z * z * sd * sd;
+    const double p2 = z * z * var;
     d -= med;
     if (d > 0.0) {
         return d * d > hi * hi + p2 ? 1 : 0;
@@ -89,9 +85,9 @@ static int beyond(const hstpf_t *f, double d, double sd, int k, double z)
     return d * d > lo * lo + p2 ? -1 : 0;
 }
 
-int hstpf__fix_step(hstpf_t *f, double y, double dt)
+/* The step rule on d = the fix less the prediction (variance var). */
+static int fix_step(hstpf_t *f, double d, double var, double dt)
 {
-    double s, sd, d;
     const int pend = f->fs.pend, side = f->fs.side;
     int out;
     f->fs.pend = 0;
@@ -102,9 +98,7 @@ int hstpf__fix_step(hstpf_t *f, double y, double dt)
         (f->outlier_run != 0u && !pend)) {
         return 0;
     }
-    predict(f, dt, &s, &sd);
-    d = y - f->origin_m - s;
-    if (pend && beyond(f, d, sd, STEP_TAIL, STEP_Z) == beyond(f, f->fs.d, 0.0, STEP_TAIL, 0.0) &&
+    if (pend && beyond(f, d, var, STEP_TAIL, STEP_Z) == beyond(f, f->fs.d, 0.0, STEP_TAIL, 0.0) &&
         fabs(d - f->fs.d) <= (double)(f->de.qt.tail_hi[STEP_TAIL] - f->de.qt.tail_lo[STEP_TAIL])) {
         /* the second: the reference stepped by their mean offset (less
          * the noise's mean, which the filters expect in every fix) */
@@ -115,15 +109,29 @@ int hstpf__fix_step(hstpf_t *f, double y, double dt)
         ++f->fs.steps;
         return 0;
     }
-    out = beyond(f, d, sd, HOLD_TAIL, HOLD_Z);
-    if (out == 0 || fabs(d) > STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]) || (!pend && (side == 2 || side == out))) {
+    out = beyond(f, d, var, HOLD_TAIL, HOLD_Z);
+    if (out == 0 || fabs(d) > STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]) ||
+        (!pend && (side == 2 || side == out))) {
         /* a held fix before this one was a lone outlier; one beyond it
          * that is not its step is held in its turn (a run of them
          * re-acquires: reacquire_after) */
-        f->fs.side = (int8_t)beyond(f, d, sd, FIT_TAIL, FIT_Z);
+        f->fs.side = (int8_t)beyond(f, d, var, FIT_TAIL, FIT_Z);
         return 0;
     }
     f->fs.pend = 1;
     f->fs.d = d;
     return 1;
+}
+
+int hstpf__fix_gate(hstpf_t *f, double y, double dt)
+{
+    double s, var, d;
+    predict(f, dt, &s, &var);
+    d = y - f->origin_m - s;
+    if (fabs(d) > f->cfg.gate_m) {
+        f->fs.pend = 0;
+        f->fs.side = 2;
+        return 1;
+    }
+    return f->cfg.fix_step ? fix_step(f, d, var, dt) : 0;
 }

@@ -64,7 +64,7 @@ void hstpf__refine_place(hstpf_t *f)
     }
     r->kp[5 * NZ + 5] = f->cfg.refine_gain_sd * f->cfg.refine_gain_sd;
     r->held = 0;
-    r->rest_s = 0.0;
+    memset(&r->rest, 0, sizeof r->rest);
 }
 
 /* The consist may have changed (p) or not (1 - p): theta's moments under
@@ -112,7 +112,7 @@ void hstpf__refine_replace_sv(hstpf_t *f, double s, double v, double pss, double
     r->kp[1] = r->kp[NZ] = psv;
     r->kp[NZ + 1] = pvv;
     r->held = 0;
-    r->rest_s = 0.0;
+    memset(&r->rest, 0, sizeof r->rest);
 }
 
 /* P = F P F' + Q with F the identity but for rows 0 and 1, in place: only
@@ -158,7 +158,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
     double *z = r->kz, *p = r->kp;
     const double dt = st->dt, sc2 = st->scale * st->scale, xi = f->xi;
     const double v = z[1], vk = 3.6 * v, c0 = z[2], c1 = z[3], c2 = z[4], k = z[5];
-    double g = 0.0, a, vd;
+    double g = 0.0, a, vd, s_pred, p_pred;
     double f0[NZ] = {1.0, 0.0, 0.0, 0.0, 0.0, 0.0}, f1[NZ];
     int i;
     r->floored = 0;
@@ -187,9 +187,11 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         z[0] += dt * v + st->scale * nm[0];
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
         r->held = hstpf__kalman_rest_speed(z, p, NZ, vd, st->free_run, st->scale * nm[2], sc2 * nm[3] * nm[3],
-                                           st->acc_var, dt, &r->rest_s);
+                                           st->acc_var, dt, &r->rest);
     }
     r->loglik = 0.0;
+    s_pred = z[0];
+    p_pred = p[0];
     if (st->has_y && hstpf__fix_exact(f)) {
         hstpf__fix_t fx;
         double rg[NZ], shrink;
@@ -244,6 +246,9 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         for (i = 0; i < NZ; ++i) {
             p[i * NZ + i] = p[i * NZ + i] > 0.0 ? p[i * NZ + i] : 0.0;
         }
+    }
+    if (st->has_y) {
+        hstpf__settle_fix(f, &r->rest, s_pred, p_pred, st->yr);
     }
     z[1] = z[1] > 0.0 ? z[1] : 0.0; /* a train never reverses */
     if (z[1] == 0.0 && r->held) {

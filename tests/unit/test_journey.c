@@ -1122,6 +1122,54 @@ static void test_fix_step(void **state)
     }
 }
 
+/* Shunting at 4 km/h: runs of 60 s, stops of 60 s with the holding brake
+ * reported. The settle timer put rows at rest one by one while the train
+ * moved on (the mean speed within 1.5 sd of 0 for 5 s, P(at rest) about
+ * 0.1), the held rows stayed held (traction below c0 in the speed loop),
+ * and the fixes then scored the rows it had stopped: a review's harness
+ * declared a wrong type in 23 of 170 runs. Now the timer settles a row
+ * only while the fixes since it began fit "stood still" at least as well
+ * as the row's filter. Expected: while the train runs at 4 km/h (after
+ * its first 10 s, before braking), over 10 runs of five shunts each, the
+ * bank is published at standstill at no more than 0.5 % of the steps (the
+ * library before the gate: 71 of 2000, 3.6 %; with it 3). The speed's
+ * noise (sd 0.22 m/s a step) and the fixes' (2.2 m) leave a train at 4
+ * km/h within 2-3 sd of rest: a few such steps are the data's. Kalman
+ * engine, three rows. */
+static void test_shunting_not_held(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    int k, seed, bad = 0, run_steps = 0;
+    (void)state;
+    for (seed = 1; seed <= 10; ++seed) {
+        config(&c, HSTPF_ENGINE_KALMAN);
+        tu_workspace(&c, 0);
+        assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+        truth_init(&t, "CRH3", 0.0, 0.0, (uint64_t)(100 + seed));
+        for (k = 0; k < 600; ++k) {
+            const int ph = k % 120; /* 0-59 run, 60-119 brake and stand */
+            const double a = ph < 60 ? 0.5 * (4.0 / 3.6 - t.v) : (t.v > 0.25 ? -0.25 : -1.0);
+            const double u = ph >= 60 && t.v <= 0.25 ? -50.0 : hstpf_resistance(&t.th, t.v) + a / XI;
+            {
+                const hstpf_input_t in = tu_input(1.0, u, truth_fix(&t), 1);
+                const int32_t rc = hstpf_step(&filt, &in);
+                assert_true(rc == HSTPF_OK || rc == HSTPF_E_OUTLIER); /* a possible step in the fixes */
+            }
+            assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+            check_estimate(&e);
+            if (ph >= 10 && ph < 60 && k >= 120) {
+                ++run_steps;
+                bad += e.standstill != 0;
+            }
+            truth_step(&t, u);
+        }
+    }
+    print_message("shunting: published at standstill at %d of %d steps running at 4 km/h\n", bad, run_steps);
+    assert_true(bad * 200 <= run_steps);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1134,7 +1182,7 @@ int main(void)
         cmocka_unit_test(test_weak_hold),             cmocka_unit_test(test_consist_change),
         cmocka_unit_test(test_long_step),             cmocka_unit_test(test_traction_stuck_rollback),
         cmocka_unit_test(test_consist_theta),         cmocka_unit_test(test_release_ends),
-        cmocka_unit_test(test_fix_step),
+        cmocka_unit_test(test_fix_step),              cmocka_unit_test(test_shunting_not_held),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1014,6 +1014,12 @@ static const hstpf_sim_leg_t line_legs[] = {
     {300.0, 250.0, 120.0}, {250.0, 200.0, 120.0}, {300.0, 250.0, 120.0},
     {200.0, 150.0, 120.0}, {300.0, 200.0, 120.0}};
 static const timetable_t line_tt = {line_legs, 5, 30.0, 0.0};
+/* Shunting: 15 runs of 60 s at 4 km/h, each followed by 60 s at rest. */
+static const hstpf_sim_leg_t shunt_legs[] = {
+    {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0},
+    {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0},
+    {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}, {4.0, 60.0, 60.0}};
+static const timetable_t shunt_tt = {shunt_legs, 15, 30.0, 0.0};
 /* The line with a consist coupled or split at the second station, where
  * the train stands 5 min (coupling and its brake test take minutes). */
 static const hstpf_sim_leg_t couple_legs[] = {
@@ -1091,6 +1097,8 @@ static const scenario_t scenarios[] = {
     {.name = "late10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 11.0},
     /* the same for 60 s: a traction signal stuck at the holding brake */
     {.name = "late60", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 61.0},
+    /* shunting at 4 km/h: the speed's noise and the fixes' leave the train within 2-3 sd of rest */
+    {.name = "shunt4", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &shunt_tt},
     /* the fixes step by +20 m on the line at 300 km/h for 300 s (a GNSS bias); one fix in 150 s
      * 20 m off, the sign alternating (lone outliers) */
     {.name = "fixbias20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},

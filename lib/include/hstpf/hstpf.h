@@ -614,6 +614,14 @@ typedef struct {
     int16_t slot[HSTPF_MAX_MODELS + 1];                  /* model l's grid (p, rest, geom), -1: none */
 } hstpf_grid_ws_t;
 
+/* Private: a Gaussian filter's settle timer (kalman_rest.c) and its
+ * evidence: "it stood still at s since the timer began" against the filter. */
+typedef struct {
+    double t;                             /* time it has looked at rest, s */
+    hstpf_real_t s, p;                    /* that position's mean (rel.) and variance; p 0: not begun */
+    hstpf_real_t llr;                     /* log LR of the fixes since, stood still against the filter */
+} hstpf_settle_t;
+
 /* Private per-model state. */
 typedef struct {
     hstpf_real_t *s;                      /* particles in the workspace: position rel. to origin */
@@ -632,7 +640,7 @@ typedef struct {
     double kx[2];                         /* Kalman engine: mean (s rel., v) */
     double kp[3];                         /* and covariance (ss, sv, vv) */
     double kll;                           /* grid engine: that filter's last increment */
-    double rest_s;                        /* Kalman: time it has looked at rest (kalman_rest.c) */
+    hstpf_settle_t rest;                  /* Kalman: its settle timer */
 } hstpf_model_t;
 
 /* Private: the continuous-theta hypothesis. */
@@ -641,7 +649,7 @@ typedef struct {
     double kz[HSTPF_REFINE_NZ];                   /* s rel., v, c0, c1, c2, k */
     double kp[HSTPF_REFINE_NZ * HSTPF_REFINE_NZ]; /* covariance, row-major */
     double logq, loglik, nis;                     /* nis: running mean of z^2 */
-    double rest_s;                                /* as hstpf_model_t's */
+    hstpf_settle_t rest;                          /* as hstpf_model_t's */
     uint16_t track_hint;
     uint8_t held, active, placed;
     uint8_t floored;                              /* this fix beyond its likelihood floor */
