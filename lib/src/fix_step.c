@@ -36,7 +36,10 @@
 #define RANGE_TAIL 22 /* 2^-10: the range of lock.c's rules */
 #define STEP_RANGES 4.0 /* a step is at most this many such ranges (Case 1: 59 m) */
 #define STEP_ACC 1.0 /* m/s^2 the blend's s + T v leaves out over a step, at most */
-typedef char hstpf__step_tail_fits[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN && HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL ? 1 : -1];
+typedef char hstpf__step_tails_fit[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN &&
+                                           HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL
+                                       ? 1
+                                       : -1];
 
 /* The blend's position at the step's end, relative to the origin (as
  * hstpf__blended_position), and a bound on its variance: each
