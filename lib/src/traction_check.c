@@ -149,8 +149,14 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
         c->placed = 0;
         return;
     }
-    if (hstpf__kalman_lost(&f->m[hstpf__leading_row(f)], c->sh.kx[0], c->sh.kx[1], c->sh.kp[0], c->sh.kp[2])) {
-        place(f); /* far from the bank (engine.h's rule): placed again, its CUSUM kept */
+    if (hstpf__kalman_lost(&f->m[hstpf__leading_row(f)], c->sh.kx[0], c->sh.kx[1], c->sh.kp[0], c->sh.kp[2]) &&
+        !(st.has_y && ll_sh > hstpf__bank_loglik(f))) {
+        /* far from the bank (engine.h's rule) and not nearer the fix than
+         * the bank: placed again, its CUSUM kept. One nearer is the bank
+         * that lost the train (a sign swapped: the bank 250 m behind, the
+         * shadow placed back on it at every step, the CUSUM frozen for
+         * 70 s) */
+        place(f);
         return;
     }
     if (st.has_y) {

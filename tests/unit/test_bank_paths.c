@@ -1086,6 +1086,49 @@ static void test_traction_wrong(void **state)
     }
 }
 
+/* The traction check's shadow (no traction) is placed back on the bank
+ * when the two are 5 sd apart (engine.h's rule for a filter that lost the
+ * train), but only when it is not nearer the fix than the bank: with the
+ * sign swapped as a train departed, the bank, braking on it, fell 250 m
+ * behind while the shadow followed the fixes; placed back on the bank at
+ * every step, its CUSUM stayed frozen and the position was published 250
+ * m, then 1 146 m, off as valid for 70 s (a review's run of hstpf-mc
+ * --scenario tracsign). Here, on a train at a steady 20 m/s: the bank
+ * moved 100 m back (by hand), the shadow stays on the fixes; the shadow
+ * moved 100 m back, it is placed on the bank. Kalman engine. */
+static void test_shadow_kept_when_nearer(void **state)
+{
+    int mode, k;
+    (void)state;
+    for (mode = 0; mode < 2; ++mode) {
+        hstpf_config_t c;
+        double y = Y0;
+        uint16_t l;
+        base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+        start(&c);
+        for (k = 1; k <= 60; ++k) {
+            y += 20.0;
+            assert_int_equal(step(1.0, hstpf_resistance(&rows[0], 20.0), y + 2.0 * sin(1.7 * k), 1), HSTPF_OK);
+        }
+        assert_true(f.tc.placed && !f.tc.fault);
+        if (mode == 0) {
+            for (l = 0; l < 2; ++l) { /* the bank lost the train */
+                f.m[l].kx[0] -= 100.0;
+                f.m[l].s_mean -= (hstpf_real_t)100.0;
+            }
+        } else {
+            f.tc.sh.kx[0] -= 100.0; /* the shadow lost it */
+        }
+        y += 20.0;
+        (void)step(1.0, hstpf_resistance(&rows[0], 20.0), y, 1);
+        if (mode == 0) {
+            TU_CLOSE(f.tc.sh.kx[0] + f.origin_m, y, 5.0);
+        } else {
+            TU_CLOSE(f.tc.sh.kx[0], (double)f.m[hstpf__leading_row(&f)].s_mean, 1e-6);
+        }
+    }
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -1440,7 +1483,7 @@ int main(void)
         cmocka_unit_test(test_reference_restart_tracked),
         cmocka_unit_test(test_probation_guards),
         cmocka_unit_test(test_traction_unknown),
-        cmocka_unit_test(test_traction_wrong),
+        cmocka_unit_test(test_traction_wrong), cmocka_unit_test(test_shadow_kept_when_nearer),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),
