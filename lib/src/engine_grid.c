@@ -484,6 +484,7 @@ static void shift(hstpf_t *f, real d)
     for (l = 0; l < n_cells_models(f); ++l) {
         f->m[l].s_mean -= d;
         f->m[l].kx[0] -= (double)d; /* the Kalman filter's, if it runs */
+        f->m[l].rest.s -= d;
     }
     for (l = 0; l < n_grids(&f->cfg); ++l) {
         f->grid.geom[l][0] -= d;

@@ -198,6 +198,7 @@ static void shift(hstpf_t *f, real d)
     for (l = 0; l < f->cfg.n_models; ++l) {
         f->m[l].kx[0] -= (double)d;
         f->m[l].s_mean -= d;
+        f->m[l].rest.s -= d; /* its timer's "stood still" too */
     }
 }
 

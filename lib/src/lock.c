@@ -228,6 +228,7 @@ void hstpf__rebase(hstpf_t *f, double rel)
     d = (real)floor(rel);
     hstpf__engine_of(f)->shift(f, d);
     f->rf.kz[0] -= (double)d;
+    f->rf.rest.s -= d;
     hstpf__trac_check_shift(f, (double)d);
     f->origin_m += (double)d;
     hstpf__track_rebase(f);

@@ -374,9 +374,9 @@ typedef struct {
      *  that fitted is held (HSTPF_E_OUTLIER, not valid), and the next one
      *  beyond its 2^-11 quantiles on the same side at about the same
      *  offset moves the position by their mean
-     *  (hstpf_estimate_t.fix_steps). Not at a standstill, across a long
-     *  step, or with gate_m 0. 0: every fix within gate_m is used
-     *  (docs/model.md, "A step in the fixes"). */
+     *  (hstpf_estimate_t.fix_steps). Moving or at rest; not across a long
+     *  step, while the traction is in doubt, or with gate_m 0. 0: every
+     *  fix within gate_m is used (docs/model.md, "A step in the fixes"). */
     uint8_t fix_step;
     /** Grid engine under Gaussian process noise (the heavy-tailed fixes
      *  of a GNSS receiver): how many rows are stepped on the grid, those
