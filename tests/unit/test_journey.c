@@ -1057,12 +1057,14 @@ static void test_release_ends(void **state)
 /* A step in the fixes' reference (a GNSS bias that changes, a balise
  * correction): at 300 km/h the fixes move by +25 m (11 sd of the fix
  * noise) from 120 s on and stay there; or only the fix at 120 s does (a
- * lone outlier); or nothing happens. Expected by hand: the first fix
+ * lone outlier); or nothing happens; or the train stands held at a
+ * platform and the fixes move by +25 m (Kalman engine). Expected by hand: the first fix
  * beyond the reach is held (HSTPF_E_OUTLIER, the estimate not valid); a
  * step's second fix moves the position by about 25 m (their mean offset:
  * sd sqrt(5 / 2) = 1.6 m, so within 6 m) and the speed by no more than the
  * noise of one fix would (0.5 m/s); then the speed stays within 4 of its
- * sd of the truth. Without the rule the step moved the speed by 3.4-5.4
+ * sd of the truth, and the position within 4 of its sd of the truth on the
+ * new reference (the step's own error is in that sd). Without the rule the step moved the speed by 3.4-5.4
  * m/s (a review's harness: 8-12 sd). A lone outlier moves nothing. Over
  * 600 clean fixes a hold has probability 600 x 1.5e-5 = 0.01 under the
  * model: none is asserted. */
@@ -1076,10 +1078,10 @@ static void fix_step_run(hstpf_engine_t engine, int mode, uint64_t seed)
     config(&c, engine);
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 300.0 / 3.6, seed);
+    truth_init(&t, "CRH3", 0.0, mode == 3 ? 0.0 : 300.0 / 3.6, seed);
     for (k = 0; k < 600; ++k) {
-        const double u = hstpf_resistance(&t.th, t.v);
-        const double off = (mode == 1 && k >= 120) || (mode == 2 && k == 120) ? 25.0 : 0.0;
+        const double u = mode == 3 ? -50.0 : hstpf_resistance(&t.th, t.v); /* 3: held at a platform */
+        const double off = (mode & 1) && k >= 120 ? 25.0 : (mode == 2 && k == 120 ? 25.0 : 0.0);
         const hstpf_input_t in = tu_input(1.0, u, truth_fix(&t) + off, 1);
         const int32_t rc = hstpf_step(&filt, &in);
         assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
@@ -1090,7 +1092,7 @@ static void fix_step_run(hstpf_engine_t engine, int mode, uint64_t seed)
         } else {
             assert_int_equal(rc, HSTPF_OK);
         }
-        if (mode == 1 && k == 121) {
+        if ((mode & 1) && k == 121) {
             assert_int_equal(e.fix_steps, 1);
             assert_int_equal(e.valid, 1);
             TU_CLOSE(e.position_m - (prev.position_m + (double)prev.speed_mps), 25.0, 6.0);
@@ -1100,10 +1102,13 @@ static void fix_step_run(hstpf_engine_t engine, int mode, uint64_t seed)
             assert_true(fabs((double)e.speed_mps - t.v) <= 4.0 * (double)e.speed_sd_mps);
             assert_true(e.valid);
         }
+        if ((mode & 1) && k > 120) { /* on the new reference, the step's own error in the sd */
+            assert_true(fabs(e.position_m - (t.s + 25.0)) <= 4.0 * e.position_sd_m);
+        }
         prev = e;
         truth_step(&t, u);
     }
-    assert_int_equal(e.fix_steps, mode == 1 ? 1u : 0u);
+    assert_int_equal(e.fix_steps, (mode & 1) ? 1u : 0u);
     assert_int_equal(e.outliers, mode == 0 ? 0u : 1u);
 }
 
@@ -1113,7 +1118,7 @@ static void test_fix_step(void **state)
     uint64_t seed;
     (void)state;
     for (seed = 1; seed <= 5; ++seed) {
-        for (mode = 0; mode < 3; ++mode) {
+        for (mode = 0; mode < 4; ++mode) {
             fix_step_run(HSTPF_ENGINE_KALMAN, mode, seed);
         }
     }
