@@ -88,7 +88,7 @@ void hstpf__settle_fix(const hstpf_t *f, hstpf_settle_t *c, double s, double pss
     }
     if (!(c->p > (hstpf_real_t)0)) { /* the timer began: stood still where the filter predicts */
         c->s = (hstpf_real_t)s;
-        c->p = (hstpf_real_t)pss;
+        c->p = (hstpf_real_t)(pss > 1e-6 ? pss : 1e-6); /* > 0: begun */
         c->llr = 0;
     }
     /* both on the noise's moments (a heavy tail's fix is scored alike by
