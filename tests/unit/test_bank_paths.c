@@ -1129,6 +1129,31 @@ static void test_shadow_kept_when_nearer(void **state)
     }
 }
 
+/* The other side of that rule: at a standstill the held bank cannot follow
+ * fixes that stepped (a step the step rule missed) and the shadow can;
+ * kept there whenever it won, the shadow only added to the CUSUM, and a
+ * true traction was taken for wrong about 20 fixes later (a review:
+ * stopstep12's fault steps 3 830 -> 19 452). At rest the shadow far from
+ * the bank goes back on it even when it is nearer the fix. Held at a
+ * platform 60 s, then the shadow and the fix 25 m back (by hand). Kalman
+ * engine. */
+static void test_shadow_at_rest_placed_back(void **state)
+{
+    hstpf_config_t c;
+    int k;
+    (void)state;
+    base_config(&c, HSTPF_ENGINE_KALMAN, 2);
+    c.fix_step = 0; /* the step missed */
+    start(&c);
+    for (k = 1; k <= 60; ++k) {
+        assert_int_equal(step(1.0, -50.0, Y0 + 2.0 * sin(1.7 * k), 1), HSTPF_OK);
+    }
+    assert_true(est().standstill && f.tc.placed);
+    f.tc.sh.kx[0] -= 25.0;
+    assert_int_equal(step(1.0, -50.0, Y0 - 25.0, 1), HSTPF_OK);
+    TU_CLOSE(f.tc.sh.kx[0], (double)f.m[hstpf__leading_row(&f)].s_mean, 1e-6);
+}
+
 /* ---- run counters saturate --------------------------------------------------- */
 
 /* valid needs outlier_run == 0 (and lost_run == 0, counted alike); it is
@@ -1483,7 +1508,7 @@ int main(void)
         cmocka_unit_test(test_reference_restart_tracked),
         cmocka_unit_test(test_probation_guards),
         cmocka_unit_test(test_traction_unknown),
-        cmocka_unit_test(test_traction_wrong), cmocka_unit_test(test_shadow_kept_when_nearer),
+        cmocka_unit_test(test_traction_wrong), cmocka_unit_test(test_shadow_kept_when_nearer), cmocka_unit_test(test_shadow_at_rest_placed_back),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
         cmocka_unit_test(test_grid_tiny_noise),
