@@ -100,12 +100,18 @@ static void step_spread(hstpf_t *f, double v)
     for (l = 0; l <= f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         m->kp[0] += v;
+        if (m->rest.p > (real)0) { /* a settle timer's "stood still" too */
+            m->rest.p = (real)((double)m->rest.p + v);
+        }
         if (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN && l < f->cfg.n_models) {
             m->s_var = (real)((double)m->s_var + v);
         }
     }
     if (f->rf.active) {
         f->rf.kp[0] += v;
+        if (f->rf.rest.p > (real)0) {
+            f->rf.rest.p = (real)((double)f->rf.rest.p + v);
+        }
     }
     f->tc.sh.kp[0] += v;
 }
