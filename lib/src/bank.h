@@ -90,7 +90,11 @@ void hstpf__trac_check_shift(hstpf_t *f, double d);
 
 /* estimate.c */
 void hstpf__blend_weights(const hstpf_t *f, double *wb);
-double hstpf__blended_position(const hstpf_t *f, double dt_ahead);
+/* The blend's position dt_ahead on (s + T v of each hypothesis, relative
+ * to the origin); var, if not NULL, a bound on its variance: each
+ * hypothesis' 2 (pss + T^2 pvv), which (sd_s + T sd_v)^2 never exceeds,
+ * and the spread between them. */
+double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var);
 /* The bank's predictive log-likelihood of this step's fix: the weighted
  * hypotheses' increments mixed by the weights before the step's update. */
 double hstpf__bank_loglik(const hstpf_t *f);

@@ -135,6 +135,18 @@ typedef struct {
 } hstpf__fix_t;
 void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf__fix_t *out);
 
+/* A fix yr scored on the noise's moments against N(s, pss), with the
+ * particle engine's floor: at floor_depth nats below the peak the
+ * log-density turns into a slope of 1 nat per sd, and the innovation is
+ * clipped there for the update (Huber) (kalman_fix.c). */
+typedef struct {
+    double loglik;
+    double sy, sd;    /* the innovation's variance pss + var(e), and its sd */
+    double z;         /* the innovation in sd, clipped */
+    int floored;      /* 1 when clipped */
+} hstpf__fixm_t;
+void hstpf__fix_moments(const hstpf_t *f, double s, double pss, double yr, hstpf__fixm_t *out);
+
 /* The rows' Kalman filters and the continuous hypothesis' EKF score a fix
  * by its real density (hstpf__kalman_fix), not by its moments: on the grid
  * engine, where they stand in for rows without a grid and are the

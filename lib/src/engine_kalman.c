@@ -133,19 +133,14 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         qsv = b * fx.var;
         qss = fx.var;
     } else if (st->has_y) {
-        const double sy = qss + nm[5] * nm[5];
-        const double sd = sqrt(sy);
-        const double depth = (double)(f->de.lp_max - f->de.floor);
-        const double zf = sqrt(2.0 * depth);
-        double z = (st->yr - nm[4] - ns) / sd, az = fabs(z), ll, ks, kv;
-        if (az <= zf) {
-            ll = -0.5 * z * z;
-        } else {
-            ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
-            z = z > 0.0 ? zf : -zf;
-            *floored = 1;
-        }
-        loglik = ll - 0.5 * log(6.283185307179586 * sy);
+        hstpf__fixm_t fm;
+        double sy, z, sd, ks, kv;
+        hstpf__fix_moments(f, ns, qss, st->yr, &fm);
+        loglik = fm.loglik;
+        *floored = fm.floored;
+        sy = fm.sy;
+        sd = fm.sd;
+        z = fm.z;
         ks = qss / sy;
         kv = qsv / sy;
         ns += ks * z * sd;

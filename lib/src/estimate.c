@@ -46,19 +46,34 @@ double hstpf__bank_loglik(const hstpf_t *f)
     return mx + log(sum);
 }
 
-double hstpf__blended_position(const hstpf_t *f, double dt_ahead)
+double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var)
 {
-    double s = 0.0, wb[HSTPF_MAX_MODELS + 1];
+    double s = 0.0, m2 = 0.0, pv = 0.0, ps, wb[HSTPF_MAX_MODELS + 1];
+    const double t2 = dt_ahead * dt_ahead;
     uint16_t l;
     hstpf__blend_weights(f, wb);
     for (l = 0; l < f->cfg.n_models; ++l) {
         const hstpf_model_t *m = &f->m[l];
-        s += wb[l] * ((double)m->s_mean + dt_ahead * (double)m->v_mean);
+        ps = (double)m->s_mean + dt_ahead * (double)m->v_mean;
+        s += wb[l] * ps;
+        if (var != NULL) {
+            m2 += wb[l] * ps * ps;
+            pv += wb[l] * 2.0 * ((double)m->s_var + t2 * (double)m->v_var);
+        }
     }
     if (f->rf.active) {
         double rs, rv, pss, pvv;
+        const double w = wb[f->cfg.n_models];
         hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
-        s += wb[f->cfg.n_models] * (rs + dt_ahead * rv);
+        ps = rs + dt_ahead * rv;
+        s += w * ps;
+        if (var != NULL) {
+            m2 += w * ps * ps;
+            pv += w * 2.0 * (pss + t2 * pvv);
+        }
+    }
+    if (var != NULL) {
+        *var = pv + (m2 > s * s ? m2 - s * s : 0.0);
     }
     return s;
 }

@@ -41,37 +41,6 @@ typedef char hstpf__step_tails_fit[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < H
                                        ? 1
                                        : -1];
 
-/* The blend's position at the step's end, relative to the origin (as
- * hstpf__blended_position), and a bound on its variance: each
- * hypothesis' 2 (pss + T^2 pvv), which (sd_s + T sd_v)^2 never exceeds,
- * the spread between them, and (STEP_ACC T^2 / 2)^2. No sqrt: the M4F's
- * double is soft-float. */
-static void predict(const hstpf_t *f, double dt, double *s, double *var)
-{
-    double wb[HSTPF_MAX_MODELS + 1], m1 = 0.0, m2 = 0.0, pv = 0.0, ps;
-    const double acc = 0.5 * STEP_ACC * dt * dt;
-    uint16_t l;
-    hstpf__blend_weights(f, wb);
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        const hstpf_model_t *m = &f->m[l];
-        ps = (double)m->s_mean + dt * (double)m->v_mean;
-        m1 += wb[l] * ps;
-        m2 += wb[l] * ps * ps;
-        pv += wb[l] * 2.0 * ((double)m->s_var + dt * dt * (double)m->v_var);
-    }
-    if (f->rf.active) {
-        double rs, rv, pss, pvv;
-        const double w = wb[f->cfg.n_models];
-        hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
-        ps = rs + dt * rv;
-        m1 += w * ps;
-        m2 += w * ps * ps;
-        pv += w * 2.0 * (pss + dt * dt * pvv);
-    }
-    *s = m1;
-    *var = pv + (m2 > m1 * m1 ? m2 - m1 * m1 : 0.0) + acc * acc;
-}
-
 /* d (the fix less the prediction) beyond the reach: the noise's tail
  * quantile k from its median and z prediction sd, root-sum-square (a
  * Gaussian's z sd of the two together). -1 below, 1 above, 0 within. */
@@ -163,9 +132,12 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
 
 int hstpf__fix_gate(hstpf_t *f, double y, double dt)
 {
-    double s, var, d;
-    predict(f, dt, &s, &var);
-    d = y - f->origin_m - s;
+    /* the blend's prediction, and what the acceleration it leaves out adds
+     * (no sqrt: the M4F's double is soft-float) */
+    const double acc = 0.5 * STEP_ACC * dt * dt;
+    double var;
+    const double d = y - f->origin_m - hstpf__blended_position(f, dt, &var);
+    var += acc * acc;
     if (fabs(d) > f->cfg.gate_m) {
         f->fs.pend = 0;
         f->fs.side = 2;

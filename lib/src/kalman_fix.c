@@ -169,6 +169,25 @@ void hstpf__kalman_fix(const hstpf_t *f, double s, double pss, double yr, hstpf_
     out->var = out->var > 0.0 ? out->var : 0.0;
 }
 
+void hstpf__fix_moments(const hstpf_t *f, double s, double pss, double yr, hstpf__fixm_t *out)
+{
+    const double *nm = f->noise_mom;
+    const double depth = (double)(f->de.lp_max - f->de.floor), zf = sqrt(2.0 * depth);
+    double az, ll;
+    out->sy = pss + nm[5] * nm[5];
+    out->sd = sqrt(out->sy);
+    out->z = (yr - nm[4] - s) / out->sd;
+    az = fabs(out->z);
+    out->floored = az > zf;
+    if (!out->floored) {
+        ll = -0.5 * out->z * out->z;
+    } else {
+        ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
+        out->z = out->z > 0.0 ? zf : -zf;
+    }
+    out->loglik = ll - 0.5 * log(6.283185307179586 * out->sy);
+}
+
 int hstpf__fix_exact(const hstpf_t *f)
 {
     return f->engine == (uint8_t)HSTPF_ENGINE_GRID && hstpf__process_gaussian(&f->cfg) &&

@@ -67,16 +67,15 @@ static int kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, dou
     return rest;
 }
 
-/* A fix's log-likelihood under N(s, p) on the noise's moments, with the
- * filters' floor (engine_kalman.c); *s and *p updated by it. */
+/* A fix's log-likelihood under N(s, p) on the noise's moments
+ * (hstpf__fix_moments); *s and *p updated by it. */
 static double moments_fix(const hstpf_t *f, double *s, double *p, double yr)
 {
-    const double *nm = f->noise_mom;
-    const double sy = *p + nm[5] * nm[5], depth = (double)(f->de.lp_max - f->de.floor);
-    const double zf = sqrt(2.0 * depth), z = (yr - nm[4] - *s) / sqrt(sy), az = fabs(z);
-    *s += *p / sy * (az <= zf ? z : (z > 0.0 ? zf : -zf)) * sqrt(sy);
-    *p *= 1.0 - *p / sy;
-    return (az <= zf ? -0.5 * z * z : -depth - ((az < 1e4 ? az : 1e4) - zf)) - 0.5 * log(6.283185307179586 * sy);
+    hstpf__fixm_t fm;
+    hstpf__fix_moments(f, *s, *p, yr, &fm);
+    *s += *p / fm.sy * fm.z * fm.sd;
+    *p *= 1.0 - *p / fm.sy;
+    return fm.loglik;
 }
 
 void hstpf__settle_fix(const hstpf_t *f, hstpf_settle_t *c, double s, double pss, double yr)

@@ -219,18 +219,15 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
             p[i * NZ + i] = p[i * NZ + i] > 0.0 ? p[i * NZ + i] : 0.0;
         }
     } else if (st->has_y) {
-        const double sy = p[0] + nm[5] * nm[5], sd = sqrt(sy);
-        const double depth = (double)(f->de.lp_max - f->de.floor), zf = sqrt(2.0 * depth);
-        double zz = (st->yr - nm[4] - z[0]) / sd, az = fabs(zz), ll, gain[NZ];
+        hstpf__fixm_t fm;
+        double sy, zz, sd, gain[NZ];
         int j;
-        if (az <= zf) {
-            ll = -0.5 * zz * zz;
-        } else {
-            ll = -depth - ((az < 1e4 ? az : 1e4) - zf);
-            r->floored = 1;
-            zz = zz > 0.0 ? zf : -zf; /* Huber: the update sees the clipped innovation */
-        }
-        r->loglik = ll - 0.5 * log(6.283185307179586 * sy);
+        hstpf__fix_moments(f, z[0], p[0], st->yr, &fm);
+        r->loglik = fm.loglik;
+        r->floored = (uint8_t)(r->floored || fm.floored);
+        sy = fm.sy;
+        sd = fm.sd;
+        zz = fm.z; /* clipped: Huber */
         r->nis = 0.98 * r->nis + 0.02 * zz * zz;
         for (i = 0; i < NZ; ++i) {
             gain[i] = p[i * NZ] / sy;
