@@ -11,10 +11,15 @@
  * the grid: their mass leaves it). Returns n >= 1; *m0 its first offset. */
 /* The nearest cell offset to x cells, held within +-2^30: a noise spread
  * over more cells than that (a tiny cell, a huge scale) must not overflow
- * the cast; its kernel is clipped to the reach below anyway. */
+ * the cast; its kernel is clipped to the reach below anyway. 0 for a NaN
+ * (a cell width gone non-finite, which the bank then resets; the cast of
+ * a NaN is undefined: the fuzz harness) */
 static int cell_index(real x)
 {
     const double c = floor((double)(x + (real)0.5));
+    if (!(c == c)) {
+        return 0;
+    }
     return c > 1073741824.0 ? 1073741824 : (c < -1073741824.0 ? -1073741824 : (int)c);
 }
 

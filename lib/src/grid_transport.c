@@ -59,11 +59,17 @@ static int remap_unit(const real *in, int i0, int i1, real a, real *out, int n_o
 
 /* Conservative remap: input cell i covers [a + i w, a + (i + 1) w] in units
  * of output cells; its mass goes to the output cells it overlaps, in
- * proportion. Mass beyond the output is dropped. */
+ * proportion. Mass beyond the output is dropped, and all of it where a or
+ * w is not finite (a state gone non-finite, which the bank then resets:
+ * floor_i() of a NaN is undefined; the fuzz harness found one through the
+ * speed box's images) */
 void hstpf__grid_remap(const real *in, int i0, int i1, real a, real w, real *out, int n_out)
 {
     const real inv = (real)1 / w;
     int i;
+    if (!(a > (real)-3e38 && a < (real)3e38 && w > (real)0 && w < (real)3e38)) {
+        return;
+    }
     if (w == (real)1 && remap_unit(in, i0, i1, a, out, n_out)) {
         return;
     }
