@@ -57,6 +57,10 @@ typedef struct {
     void (*after_weights)(hstpf_t *f, const hstpf__step_t *st);
     /* Positions move by -d: the origin moved by +d. */
     void (*shift)(hstpf_t *f, hstpf_real_t d);
+    /* Positions spread by a zero-mean Gaussian of variance var (m^2): the
+     * reference stepped by an offset known to that (fix_step.c). NULL when
+     * the engine's states are the Gaussian filters fix_step.c widens. */
+    void (*spread)(hstpf_t *f, double var);
     /* Bytes of workspace a validated configuration needs (0: none). */
     size_t (*ws_bytes)(const hstpf_config_t *c);
     /* Points the instance's arrays into ws (ws_bytes long, aligned). */

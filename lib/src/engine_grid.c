@@ -491,6 +491,14 @@ static void shift(hstpf_t *f, real d)
     }
 }
 
+static void spread(hstpf_t *f, double var)
+{
+    uint16_t k;
+    for (k = 0; k < n_grids(&f->cfg); ++k) {
+        hstpf__grid_spread(f, k, var);
+    }
+}
+
 static size_t ws_bytes(const hstpf_config_t *c)
 {
     return HSTPF_GRID_WS_BYTES(n_grids(c));
@@ -516,5 +524,5 @@ static void attach(hstpf_t *f, void *ws)
     f->grid.rest = (real(*)[NS])(void *)r;
 }
 
-const hstpf__engine_t hstpf__engine_grid = {place_all, place_one, predict_update, NULL, shift, ws_bytes,
+const hstpf__engine_t hstpf__engine_grid = {place_all, place_one, predict_update, NULL, shift, spread, ws_bytes,
                                              attach};

@@ -210,4 +210,4 @@ static void attach(hstpf_t *f, void *ws)
     (void)ws;
 }
 
-const hstpf__engine_t hstpf__engine_kalman = {place_all, place_one, predict_update, NULL, shift, ws_bytes, attach};
+const hstpf__engine_t hstpf__engine_kalman = {place_all, place_one, predict_update, NULL, shift, NULL, ws_bytes, attach};

@@ -417,6 +417,27 @@ static void shift(hstpf_t *f, real d)
     }
 }
 
+/* Each particle's position moved by a draw of N(0, var); the paired bank
+ * moves every model's i-th particle by the same draw. */
+static void spread(hstpf_t *f, double var)
+{
+    const real sd = (real)sqrt(var);
+    const int paired = paired_bank(f);
+    uint16_t l, i;
+    if (paired) {
+        draw_unit(f, &f->rng);
+    }
+    for (l = 0; l < f->cfg.n_models; ++l) {
+        hstpf_model_t *m = &f->m[l];
+        if (!paired) {
+            draw_unit(f, &m->rng);
+        }
+        for (i = 0; i < f->cfg.n_particles; ++i) {
+            m->s[i] += sd * f->nz_s[i];
+        }
+    }
+}
+
 static size_t ws_bytes(const hstpf_config_t *c)
 {
     return HSTPF_PARTICLE_WS_BYTES(c->n_models, c->n_particles);
@@ -441,8 +462,8 @@ static void attach(hstpf_t *f, void *ws)
     f->counts = (uint16_t *)(void *)(r + 3 * n);
 }
 
-const hstpf__engine_t hstpf__engine_particle = {place_all,    place_one, predict_update, after_weights,
-                                                 shift,        ws_bytes,  attach};
+const hstpf__engine_t hstpf__engine_particle = {place_all, place_one, predict_update, after_weights,
+                                                 shift,     spread,    ws_bytes,       attach};
 
 int32_t hstpf_particles(const hstpf_t *f, uint16_t model, double *s, hstpf_real_t *v, hstpf_real_t *w)
 {

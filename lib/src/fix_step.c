@@ -17,7 +17,15 @@
  * while held), whose innovations grow a little each step, are not taken
  * for steps. A jump beyond STEP_RANGES of the noise's 2^-10 range is not a
  * step: a reference that restarted, fixes that run backwards, a train
- * lost (lock.c's rules). */
+ * lost (lock.c's rules).
+ *
+ * A heavy-tailed noise's quantiles reach far (a Student-t(3)'s 2^-17 one
+ * is 50 of its scales): no single fix is beyond them, and a 12 m step at a
+ * platform was taken for the train moving off at 0.7 m/s, published valid
+ * for a minute (hstpf-mc --scenario stopstep12-t). There a run of fixes
+ * tells: the last 2-4 used, on one side after one that fitted, are a step
+ * when "the reference moved by their mean offset" explains them better
+ * than "it did not" by RUN_LLR nats under the fix noise's own density. */
 #include <math.h>
 
 #include "bank.h"
@@ -36,6 +44,16 @@
 #define RANGE_TAIL 22 /* 2^-10: the range of lock.c's rules */
 #define STEP_RANGES 4.0 /* a step is at most this many such ranges (Case 1: 59 m) */
 #define STEP_ACC 1.0 /* m/s^2 the blend's s + T v leaves out over a step, at most */
+#define RUN_MAX 4     /* fixes in a run, at most (f->fs.run holds one more: the fix before) */
+/* a run's evidence for a step: a Gaussian's GLR exceeds it by chance
+ * with P(chi2_1 > 40) = 2.5e-10 per run tried */
+#define RUN_LLR 20.0
+/* the run rule is for noises whose hold quantile lies beyond this many sd
+ * (a Gaussian's: HOLD_Z): a Gaussian's evidence grows with the square of
+ * an offset, so a drift (a train leaving while the brake is reported)
+ * passes RUN_LLR within a few fixes (test_held_but_moving), and the hold
+ * rule already sees its steps of 4.3 sd and more */
+#define RUN_HEAVY_Z (1.5 * HOLD_Z)
 typedef char hstpf__step_tails_fit[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN &&
                                            HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL
                                        ? 1
@@ -57,15 +75,19 @@ static int beyond(const hstpf_t *f, double d, double var, int k, double z)
     return d * d > lo * lo + p2 ? -1 : 0;
 }
 
-/* The step's offset, the mean of two fixes, has the variance of one over
- * 2: each Gaussian filter's position takes it in (the Kalman rows, the
+/* The step's offset, the mean of k fixes, has the variance of one over
+ * k: each Gaussian filter's position takes it in (the Kalman rows, the
  * grid's stand-ins, the continuous hypothesis, the traction check's
- * shadow). Without it a train at rest was published 2-3 m off with an sd
- * of 0.2 m for a minute after a step (a review). Not the grid's cells nor
- * the particles (docs/model.md). */
+ * shadow), and the grid's cells and the particles are spread by it.
+ * Without it a train at rest was published 2-3 m off with an sd of 0.2 m
+ * for a minute after a step (a review; on the grid, stopstep12-t). */
 static void step_spread(hstpf_t *f, double v)
 {
+    const hstpf__engine_t *e = hstpf__engine_of(f);
     uint16_t l;
+    if (e->spread != NULL) {
+        e->spread(f, v);
+    }
     for (l = 0; l <= f->cfg.n_models; ++l) {
         hstpf_model_t *m = &f->m[l];
         m->kp[0] += v;
@@ -85,6 +107,78 @@ static void step_spread(hstpf_t *f, double v)
     f->tc.sh.kp[0] += v;
 }
 
+/* The reference moved by step (variance v): the position moves, the
+ * speed does not. */
+static void take_step(hstpf_t *f, double step, double v)
+{
+    f->origin_m += step;
+    f->top_m += step;
+    hstpf__track_rebase(f);
+    ++f->fs.steps;
+    step_spread(f, v);
+    f->fs.run_n = 0;
+}
+
+/* Whether the last k fixes used (k >= 2, the one before them too) are a
+ * step; its size into *step. */
+static int run_is_step(const hstpf_t *f, int k, double shrink, double *step)
+{
+    const hstpf_real_t *r = f->fs.run;
+    const double mean = f->noise_mom[4];
+    double sum = 0.0, llr = 0.0;
+    int i, side;
+    for (i = 0; i < k; ++i) {
+        sum += (double)r[i];
+    }
+    *step = sum / (double)k - mean;
+    side = *step > 0.0 ? 1 : -1;
+    /* one side, after a fix that fitted: a jump, not dynamics that drift */
+    if (beyond(f, (double)r[k], 0.0, FIT_TAIL, 0.0) == side) {
+        return 0;
+    }
+    for (i = 0; i < k; ++i) {
+        const double e = (double)r[i] - mean; /* the noise if the reference did not move */
+        if ((e > 0.0 ? 1 : -1) != side) {
+            return 0;
+        }
+        /* scored as if the prediction were exact, its spread taken out by
+         * shrinking the offsets as a Gaussian's would be */
+        llr += (double)hstpf__dist_logpdf(&f->de, (real)(mean + shrink * (e - *step))) -
+               (double)hstpf__dist_logpdf(&f->de, (real)(mean + shrink * e));
+    }
+    return llr >= RUN_LLR;
+}
+
+/* A run of fixes that the filters used, each beyond the noise's usual but
+ * none beyond its reach: d joins the run; a step is taken when the run
+ * shows one. */
+static void run_rule(hstpf_t *f, double d, double var)
+{
+    hstpf_fix_step_t *s = &f->fs;
+    const double nv = f->noise_mom[5] * f->noise_mom[5];
+    const double shrink = sqrt(nv / (nv + var));
+    const double reach = STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]);
+    const double med = (double)hstpf__dist_sample(&f->de.qt, 0x80000000u);
+    const double hold_hi = (double)f->de.qt.tail_hi[HOLD_TAIL] - med, hold_lo = med - (double)f->de.qt.tail_lo[HOLD_TAIL];
+    int k;
+    if (!((hold_hi > hold_lo ? hold_hi : hold_lo) > RUN_HEAVY_Z * f->noise_mom[5])) {
+        return; /* a light-tailed noise: the hold rule's */
+    }
+    for (k = RUN_MAX; k > 0; --k) {
+        s->run[k] = s->run[k - 1];
+    }
+    s->run[0] = (real)d;
+    s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
+    for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
+        double step;
+        if (run_is_step(f, k, shrink, &step) && fabs(step) <= reach) {
+            take_step(f, step, nv / (double)k);
+            f->fs.side = (int8_t)beyond(f, d - step, var, FIT_TAIL, FIT_Z);
+            return;
+        }
+    }
+}
+
 /* The step rule on d = the fix less the prediction (variance var). */
 static int fix_step(hstpf_t *f, double d, double var, double dt)
 {
@@ -99,6 +193,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
     if (f->pr.active || f->pr.timed || f->lost_run != 0u || hstpf__substeps(f, dt) > 1u || f->tc.doubt ||
         f->tc.fault || f->tc.release ||
         (f->outlier_run != 0u && !pend)) {
+        f->fs.run_n = 0;
         return 0;
     }
     if (pend && beyond(f, d, var, STEP_TAIL, STEP_Z) == beyond(f, f->fs.d, 0.0, STEP_TAIL, 0.0) &&
@@ -106,11 +201,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
         /* the second: the reference stepped by their mean offset (less
          * the noise's mean, which the filters expect in every fix) */
         const double step = 0.5 * (d + f->fs.d) - f->noise_mom[4];
-        f->origin_m += step;
-        f->top_m += step;
-        hstpf__track_rebase(f);
-        ++f->fs.steps;
-        step_spread(f, 0.5 * f->noise_mom[5] * f->noise_mom[5]);
+        take_step(f, step, 0.5 * f->noise_mom[5] * f->noise_mom[5]);
         /* this fix on the new reference: its return next is held (a
          * two-fix excursion was taken for a step, and the return for speed) */
         f->fs.side = (int8_t)beyond(f, d - step, var, FIT_TAIL, FIT_Z);
@@ -123,8 +214,10 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
          * that is not its step is held in its turn (a run of them
          * re-acquires: reacquire_after) */
         f->fs.side = (int8_t)beyond(f, d, var, FIT_TAIL, FIT_Z);
+        run_rule(f, d, var);
         return 0;
     }
+    f->fs.run_n = 0;
     f->fs.pend = 1;
     f->fs.d = d;
     return 1;
@@ -141,6 +234,7 @@ int hstpf__fix_gate(hstpf_t *f, double y, double dt)
     if (fabs(d) > f->cfg.gate_m) {
         f->fs.pend = 0;
         f->fs.side = 2;
+        f->fs.run_n = 0;
         return 1;
     }
     return f->cfg.fix_step ? fix_step(f, d, var, dt) : 0;

@@ -153,6 +153,9 @@ real hstpf__grid_transport(hstpf_t *f, const hstpf_model_t *m, uint16_t l, real 
 int hstpf__grid_kernel(const hstpf_dist_quantiles_t *d, real scale, real h, int reach, real tail, real *k, int *m0);
 /* The process noise convolved into model l's cells from f->grid.work. */
 void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng);
+/* Grid k's positions spread by N(0, var) on a box widened to hold it (a
+ * step in the fixes' reference, fix_step.c). */
+void hstpf__grid_spread(hstpf_t *f, uint16_t k, double var);
 
 /* ---- grid_measure.c: step 4 -------------------------------------------- */
 

@@ -186,3 +186,52 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
         rest[i] = f->grid.rnew[i] + rpend[i];
     }
 }
+
+#define SPREAD_REACH 4.5 /* sd of a step's spread the widened box reaches each side */
+
+void hstpf__grid_spread(hstpf_t *f, uint16_t k, double var)
+{
+    real *g = f->grid.geom[k], *p = f->grid.p[k], *mat = f->grid.work, *t = f->grid.row;
+    const real sd = (real)sqrt(var);
+    /* the new cells: the old box widened by SPREAD_REACH sd each side,
+     * centred on it */
+    const real ds = ((real)NS * g[1] + (real)(2.0 * SPREAD_REACH) * sd) / (real)NS;
+    const real s0 = g[0] + (real)0.5 * (real)NS * (g[1] - ds);
+    int i, c, j;
+    if (!(sd > (real)0 && g[1] > (real)0 && ds - ds == (real)0)) {
+        return;
+    }
+    /* mat[c NS + i]: the share of old cell c (its mass at its centre, as
+     * the moments take it) that N(0, var) moves into new cell i; each old
+     * cell's shares sum to 1, so the mass stays exactly */
+    for (c = 0; c < NS; ++c) {
+        const real x = g[0] + ((real)c + (real)0.5) * g[1];
+        real el, eh, sum = 0;
+        hstpf__grid_cdf2(&f->unit, (s0 - x) / sd, &el, &eh);
+        for (i = 0; i < NS; ++i) {
+            real ul, uh, q;
+            hstpf__grid_cdf2(&f->unit, (s0 + (real)(i + 1) * ds - x) / sd, &ul, &uh);
+            q = eh < (real)0.5 ? eh - uh : ul - el; /* as hstpf__grid_prob_in */
+            q = q > (real)0 ? q : (real)0;
+            mat[c * NS + i] = q;
+            sum += q;
+            el = ul;
+            eh = uh;
+        }
+        for (i = 0; i < NS; ++i) {
+            mat[c * NS + i] = sum > (real)0 ? mat[c * NS + i] / sum : (real)(i == NS / 2);
+        }
+    }
+    for (j = 0; j <= NV; ++j) { /* each speed row, then the row at rest */
+        real *x = j < NV ? p + j * NS : f->grid.rest[k];
+        memset(t, 0, sizeof f->grid.row);
+        for (c = 0; c < NS; ++c) {
+            if (x[c] > (real)0) {
+                hstpf__grid_axpy_row(t, mat + c * NS, x[c]);
+            }
+        }
+        memcpy(x, t, sizeof f->grid.row);
+    }
+    g[0] = s0;
+    g[1] = ds;
+}

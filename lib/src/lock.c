@@ -214,6 +214,7 @@ void hstpf__drop_lock(hstpf_t *f, int keep_pend)
     f->pr.active = 0;
     f->fs.pend = 0;
     f->fs.side = 2;
+    f->fs.run_n = 0;
     f->tc.placed = 0; /* placed again at the new lock; a fault stands */
 }
 

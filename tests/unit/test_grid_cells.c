@@ -269,6 +269,58 @@ static void test_moments_by_hand(void **state)
     }
 }
 
+/* A step in the fixes' reference spreads a grid's positions by N(0, v)
+ * (hstpf__grid_spread, fix_step.c). Expected by hand: the mass and the
+ * mean stay (the kernel is normalised, the box widened by 4.5 sd each side
+ * holds it); the variance grows by v, plus what the wider cells add:
+ * moving mass onto them (at most their width^2 / 4) and the kernel's cell
+ * masses (their width^2 / 12), so within [v, v + width^2 / 2]; the speeds'
+ * moments do not move. The same for the mass at rest. */
+static void test_spread_by_hand(void **state)
+{
+    static const char *const names[] = {"CRH1", "CRH3", "CRH5"};
+    hstpf_theta_t rows[3];
+    hstpf_config_t c;
+    hstpf_real_t *p, *rest, *g;
+    const double v = 2.5;
+    double s_mean, s_var, v_mean, v_var, mass, width;
+    (void)state;
+    tu_config_rows(&c, rows, names, 3);
+    c.engine = HSTPF_ENGINE_GRID;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
+    p = gf.grid.p[0];
+    rest = gf.grid.rest[0];
+    g = gf.grid.geom[0];
+    memset(p, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS * HSTPF_GRID_NV);
+    memset(rest, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS);
+    g[0] = 1000; /* as above: a train nearly at rest, known to millimetres */
+    g[1] = (hstpf_real_t)0.001;
+    g[2] = 0;
+    g[3] = (hstpf_real_t)0.002;
+    p[2 * HSTPF_GRID_NS + 5] = (hstpf_real_t)0.25;
+    p[3 * HSTPF_GRID_NS + 9] = (hstpf_real_t)0.25;
+    rest[7] = (hstpf_real_t)0.5;
+    hstpf__grid_moments(&gf, &gf.m[0], 0);
+    s_mean = (double)gf.m[0].s_mean;
+    s_var = (double)gf.m[0].s_var;
+    v_mean = (double)gf.m[0].v_mean;
+    v_var = (double)gf.m[0].v_var;
+    hstpf__grid_spread(&gf, 0, v);
+    width = (double)g[1];
+    TU_CLOSE(width, (20.0 * 0.001 + 9.0 * sqrt(v)) / 20.0, 1e-5);
+    mass = (double)hstpf__grid_mass(&gf, 0);
+    TU_CLOSE(mass, 1.0, 1e-5);
+    TU_CLOSE((double)hstpf__grid_sum(rest, HSTPF_GRID_NS), 0.5, 1e-5);
+    hstpf__grid_moments(&gf, &gf.m[0], 0);
+    TU_CLOSE((double)gf.m[0].s_mean, s_mean, 1e-3);
+    assert_true((double)gf.m[0].s_var >= s_var + v - 1e-3);
+    assert_true((double)gf.m[0].s_var <= s_var + v + 0.5 * width * width);
+    TU_CLOSE((double)gf.m[0].v_mean, v_mean, 1e-6);
+    TU_CLOSE((double)gf.m[0].v_var, v_var, 1e-8);
+    print_message("spread by 2.5 m^2: variance %.4f -> %.4f m^2 (cells %.3f m)\n", s_var, (double)gf.m[0].s_var, width);
+}
+
 /* The fix noises of the filters' reference: a Gaussian (closed form), and
  * as tables (linear between points 1 m apart) hstpf-mc's heavy-mix (95 %
  * N(0, 2.24 m), 5 % N(0, 22.4 m)) and heavy-t (Student-t, 3 degrees of
@@ -446,6 +498,7 @@ int main(void)
         cmocka_unit_test(test_remap_reference),
         cmocka_unit_test(test_cdf_tails),
         cmocka_unit_test(test_moments_by_hand),
+        cmocka_unit_test(test_spread_by_hand),
         cmocka_unit_test(test_speed_lattice_by_hand),
         cmocka_unit_test(test_fix_reference),
     };

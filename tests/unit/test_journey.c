@@ -1122,8 +1122,90 @@ static void test_fix_step(void **state)
             fix_step_run(HSTPF_ENGINE_KALMAN, mode, seed);
         }
     }
-    for (mode = 0; mode < 3; ++mode) {
+    for (mode = 0; mode < 4; ++mode) {
         fix_step_run(HSTPF_ENGINE_GRID, mode, 1);
+    }
+    /* at a platform the cells and the particles take the step's variance
+     * too (without it, 5-9 sd off on the new reference) */
+    fix_step_run(HSTPF_ENGINE_PARTICLE, 3, 1);
+    fix_step_run(HSTPF_ENGINE_PARTICLE, 3, 2);
+    fix_step_run(HSTPF_ENGINE_GRID, 3, 2);
+}
+
+/* Student-t(3) fixes of scale 1.97 m, as a table 1 m apart over +-120 m
+ * (hstpf-mc's heavy-t). */
+#define T3_N 241
+static double t3_x[T3_N], t3_p[T3_N];
+
+static double t3_fix(truth_t *t)
+{
+    const double z = hstpf_sim_gauss(&t->rng), a = hstpf_sim_gauss(&t->rng), b = hstpf_sim_gauss(&t->rng),
+                 c = hstpf_sim_gauss(&t->rng);
+    return t->s + 1.97 * z / sqrt((a * a + b * b + c * c) / 3.0);
+}
+
+/* A train held at a platform for 600 s with Student-t(3) fixes (the grid
+ * engine), the fixes' reference stepping by +20 m from the 120th (step) or
+ * not (clean). A Student-t's quantiles reach far (2^-17: 50 scales), so no
+ * one fix is beyond them; before the run rule the bank took the step for
+ * the train moving off (stopstep12-t: 0.6-2.4 m/s, valid, for a minute).
+ * Expected by hand: each fix 20 m off scores 2 ln(1 + (20 / 1.97)^2 / 3) =
+ * 7.1 nats less than on the new reference, so 3-4 such fixes pass the
+ * rule's 20 nats: one step within 8 fixes; the train published at
+ * standstill with speed 0 at every step after the first 10; after the
+ * step the position within 4 of its sd of the truth on the new reference
+ * (the step's own error, sd sqrt(5 / k) = 1.1-1.6 m, is in that sd: the
+ * grid's cells are spread by it; without the spread 5.6 sd off). Clean:
+ * no step in 600 fixes (by chance, two to four consecutive fixes on one
+ * side passing 20 nats: a t's GLR, well below 1e-6 a fix). */
+static void fix_step_heavy_run(int stepped, uint64_t seed)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    int k, j;
+    for (j = 0; j < T3_N; ++j) {
+        const double x = -120.0 + (double)j, z = x / 1.97;
+        t3_x[j] = x;
+        t3_p[j] = pow(1.0 + z * z / 3.0, -2.0);
+    }
+    config(&c, HSTPF_ENGINE_GRID);
+    memset(&c.noise_e, 0, sizeof c.noise_e);
+    c.noise_e.kind = HSTPF_DIST_TABLE;
+    c.noise_e.table_x = t3_x;
+    c.noise_e.table_p = t3_p;
+    c.noise_e.table_n = T3_N;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 0.0, 0.0, seed);
+    for (k = 0; k < 600; ++k) {
+        const double off = stepped && k >= 120 ? 20.0 : 0.0;
+        const hstpf_input_t in = tu_input(1.0, -50.0, t3_fix(&t) + off, 1);
+        assert_int_equal(hstpf_step(&filt, &in), HSTPF_OK);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (k >= 60) {
+            assert_true(e.valid);
+            assert_int_equal(e.standstill, 1);
+            assert_true(e.speed_mps == 0.0f);
+        }
+        if (stepped && k == 128) {
+            assert_int_equal(e.fix_steps, 1);
+        }
+        if (k >= 128 || (k < 120 && k >= 60)) {
+            assert_true(fabs(e.position_m - (t.s + off)) <= 4.0 * e.position_sd_m);
+        }
+    }
+    assert_int_equal(e.fix_steps, stepped ? 1u : 0u);
+}
+
+static void test_fix_step_heavy(void **state)
+{
+    uint64_t seed;
+    (void)state;
+    for (seed = 1; seed <= 4; ++seed) {
+        fix_step_heavy_run(1, seed);
+        fix_step_heavy_run(0, seed);
     }
 }
 
@@ -1188,6 +1270,7 @@ int main(void)
         cmocka_unit_test(test_long_step),             cmocka_unit_test(test_traction_stuck_rollback),
         cmocka_unit_test(test_consist_theta),         cmocka_unit_test(test_release_ends),
         cmocka_unit_test(test_fix_step),              cmocka_unit_test(test_shunting_not_held),
+        cmocka_unit_test(test_fix_step_heavy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

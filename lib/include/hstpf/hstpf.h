@@ -698,9 +698,11 @@ typedef struct {
 /* A step in the fixes' reference (fix_step.c). */
 typedef struct {
     double d;        /* the held fix less the prediction, m */
+    hstpf_real_t run[5]; /* the last fixes used less their predictions, newest first (a run of them: a step) */
     uint32_t steps;  /* steps taken */
     uint8_t pend;    /* the last fix was held as a possible step's first */
     int8_t side;     /* where the last fix used lay: -1 / 1 beyond the prediction's reach, 0 within, 2 unknown */
+    uint8_t run_n;   /* how many of run[] hold one */
 } hstpf_fix_step_t;
 
 typedef struct {
