@@ -51,6 +51,14 @@ static inline hstpf_real_t hstpf__dist_tail(const hstpf_real_t *tab, uint32_t t)
     return tab[k] + frac * (tab[k + 1] - tab[k]);
 }
 
+/* The width between the tail nodes k, F^-1(1 - 2^(k - 32)) - F^-1(2^(k - 32)):
+ * how far two draws lie apart but rarely (the lock's and the step rule's
+ * ranges). */
+static inline double hstpf__dist_range(const hstpf_dist_quantiles_t *d, int k)
+{
+    return (double)d->tail_hi[k] - (double)d->tail_lo[k];
+}
+
 static inline hstpf_real_t hstpf__dist_sample(const hstpf_dist_quantiles_t *d, uint32_t r)
 {
     const uint32_t b = r >> HSTPF__QSHIFT;

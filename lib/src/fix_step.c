@@ -23,7 +23,7 @@
  * is 50 of its scales): no single fix is beyond them, and a 12 m step at a
  * platform was taken for the train moving off at 0.7 m/s, published valid
  * for a minute (hstpf-mc --scenario stopstep12-t). There a run of fixes
- * tells: the last 2-4 used, on one side after one that fitted, are a step
+ * tells: the last 2-6 used, on one side after one that fitted, are a step
  * when "the reference moved by their mean offset" explains them better
  * than "it did not" by RUN_LLR nats under the fix noise's own density. */
 #include <math.h>
@@ -44,15 +44,18 @@
 #define RANGE_TAIL 22 /* 2^-10: the range of lock.c's rules */
 #define STEP_RANGES 4.0 /* a step is at most this many such ranges (Case 1: 59 m) */
 #define STEP_ACC 1.0 /* m/s^2 the blend's s + T v leaves out over a step, at most */
-#define RUN_MAX 4     /* fixes in a run, at most (f->fs.run holds one more: the fix before) */
+#define RUN_MAX 6     /* fixes in a run, at most (f->fs.run holds one more: the fix before) */
 /* a run's evidence for a step: a Gaussian's GLR exceeds it by chance
  * with P(chi2_1 > 40) = 2.5e-10 per run tried */
 #define RUN_LLR 20.0
-/* the run rule is for noises whose hold quantile lies beyond this many sd
- * (a Gaussian's: HOLD_Z): a Gaussian's evidence grows with the square of
- * an offset, so a drift (a train leaving while the brake is reported)
- * passes RUN_LLR within a few fixes (test_held_but_moving), and the hold
- * rule already sees its steps of 4.3 sd and more */
+/* the run rule is for noises whose hold quantiles lie beyond this many sd
+ * on both sides (a Gaussian's: HOLD_Z): a Gaussian's evidence grows with
+ * the square of an offset, so a drift (a train leaving while the brake is
+ * reported) passes RUN_LLR within a few fixes (test_held_but_moving), and
+ * the hold rule already sees its steps of 4.3 sd and more; a noise with an
+ * edge (the paper's Gamma) scores a prediction a few cm past it as
+ * impossible, which any step then explains (stops-case2: 786 false steps
+ * in 340 runs) */
 #define RUN_HEAVY_Z (1.5 * HOLD_Z)
 typedef char hstpf__step_tails_fit[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN &&
                                            HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL
@@ -120,33 +123,33 @@ static void take_step(hstpf_t *f, double step, double v)
 }
 
 /* Whether the last k fixes used (k >= 2, the one before them too) are a
- * step; its size into *step. */
-static int run_is_step(const hstpf_t *f, int k, double shrink, double *step)
+ * step; its size into *step. In float: the M4F's double is soft-float. */
+static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
 {
-    const hstpf_real_t *r = f->fs.run;
-    const double mean = f->noise_mom[4];
-    double sum = 0.0, llr = 0.0;
+    const real *r = f->fs.run, mean = (real)f->noise_mom[4];
+    real sum = 0, llr = 0;
     int i, side;
     for (i = 0; i < k; ++i) {
-        sum += (double)r[i];
+        sum += r[i];
     }
-    *step = sum / (double)k - mean;
-    side = *step > 0.0 ? 1 : -1;
+    *step = sum / (real)k - mean;
+    side = *step > (real)0 ? 1 : -1;
     /* one side, after a fix that fitted: a jump, not dynamics that drift */
     if (beyond(f, (double)r[k], 0.0, FIT_TAIL, 0.0) == side) {
         return 0;
     }
-    for (i = 0; i < k; ++i) {
-        const double e = (double)r[i] - mean; /* the noise if the reference did not move */
-        if ((e > 0.0 ? 1 : -1) != side) {
+    /* each scored as if the prediction were exact, its spread taken out
+     * by shrinking the offsets as a Gaussian's would be: + log p(e - step)
+     * (i even) - log p(e) (i odd), e the noise if the reference did not
+     * move (one call of the inlined density: flash) */
+    for (i = 0; i < 2 * k; ++i) {
+        const real e = r[i / 2] - mean;
+        if ((e > (real)0 ? 1 : -1) != side) {
             return 0;
         }
-        /* scored as if the prediction were exact, its spread taken out by
-         * shrinking the offsets as a Gaussian's would be */
-        llr += (double)hstpf__dist_logpdf(&f->de, (real)(mean + shrink * (e - *step))) -
-               (double)hstpf__dist_logpdf(&f->de, (real)(mean + shrink * e));
+        llr += (i & 1 ? (real)-1 : (real)1) * hstpf__dist_logpdf(&f->de, mean + shrink * (e - (i & 1 ? (real)0 : *step)));
     }
-    return llr >= RUN_LLR;
+    return llr >= (real)RUN_LLR;
 }
 
 /* A run of fixes that the filters used, each beyond the noise's usual but
@@ -155,14 +158,14 @@ static int run_is_step(const hstpf_t *f, int k, double shrink, double *step)
 static void run_rule(hstpf_t *f, double d, double var)
 {
     hstpf_fix_step_t *s = &f->fs;
-    const double nv = f->noise_mom[5] * f->noise_mom[5];
-    const double shrink = sqrt(nv / (nv + var));
-    const double reach = STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]);
-    const double med = (double)hstpf__dist_sample(&f->de.qt, 0x80000000u);
-    const double hold_hi = (double)f->de.qt.tail_hi[HOLD_TAIL] - med, hold_lo = med - (double)f->de.qt.tail_lo[HOLD_TAIL];
+    const hstpf_dist_quantiles_t *q = &f->de.qt;
+    const real sd = (real)f->noise_mom[5], med = hstpf__dist_sample(q, 0x80000000u);
+    const real hold_hi = q->tail_hi[HOLD_TAIL] - med, hold_lo = med - q->tail_lo[HOLD_TAIL];
+    const real shrink = sd / (real)sqrt((double)(sd * sd) + var);
+    const real reach = (real)(STEP_RANGES * hstpf__dist_range(q, RANGE_TAIL));
     int k;
-    if (!((hold_hi > hold_lo ? hold_hi : hold_lo) > RUN_HEAVY_Z * f->noise_mom[5])) {
-        return; /* a light-tailed noise: the hold rule's */
+    if (!((hold_hi < hold_lo ? hold_hi : hold_lo) > (real)RUN_HEAVY_Z * sd)) {
+        return; /* a light tail, or an edge: the hold rule's */
     }
     for (k = RUN_MAX; k > 0; --k) {
         s->run[k] = s->run[k - 1];
@@ -170,10 +173,10 @@ static void run_rule(hstpf_t *f, double d, double var)
     s->run[0] = (real)d;
     s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
     for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
-        double step;
-        if (run_is_step(f, k, shrink, &step) && fabs(step) <= reach) {
-            take_step(f, step, nv / (double)k);
-            f->fs.side = (int8_t)beyond(f, d - step, var, FIT_TAIL, FIT_Z);
+        real step;
+        if (run_is_step(f, k, shrink, &step) && fabs((double)step) <= (double)reach) {
+            take_step(f, (double)step, (double)(sd * sd) / (double)k);
+            f->fs.side = (int8_t)beyond(f, d - (double)step, var, FIT_TAIL, FIT_Z);
             return;
         }
     }
@@ -197,7 +200,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
         return 0;
     }
     if (pend && beyond(f, d, var, STEP_TAIL, STEP_Z) == beyond(f, f->fs.d, 0.0, STEP_TAIL, 0.0) &&
-        fabs(d - f->fs.d) <= (double)(f->de.qt.tail_hi[STEP_TAIL] - f->de.qt.tail_lo[STEP_TAIL])) {
+        fabs(d - f->fs.d) <= hstpf__dist_range(&f->de.qt, STEP_TAIL)) {
         /* the second: the reference stepped by their mean offset (less
          * the noise's mean, which the filters expect in every fix) */
         const double step = 0.5 * (d + f->fs.d) - f->noise_mom[4];
@@ -208,7 +211,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
         return 0;
     }
     out = beyond(f, d, var, HOLD_TAIL, HOLD_Z);
-    if (out == 0 || fabs(d) > STEP_RANGES * (double)(f->de.qt.tail_hi[RANGE_TAIL] - f->de.qt.tail_lo[RANGE_TAIL]) ||
+    if (out == 0 || fabs(d) > STEP_RANGES * hstpf__dist_range(&f->de.qt, RANGE_TAIL) ||
         (!pend && (side == 2 || side == out))) {
         /* a held fix before this one was a lone outlier; one beyond it
          * that is not its step is held in its turn (a run of them

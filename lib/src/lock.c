@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "bank.h"
+#include "dist_impl.h"
 #include "engine.h"
 #include "refine.h"
 #include "track.h"
@@ -22,7 +23,7 @@
 static double fix_range(const hstpf_t *f)
 {
     const int k = HSTPF_DIST_TAILN - 3; /* F^-1(2^(k - 32)) = F^-1(2^-10) */
-    return (double)f->de.qt.tail_hi[k] - (double)f->de.qt.tail_lo[k];
+    return hstpf__dist_range(&f->de.qt, k);
 }
 
 /* The fix noise's 2^-10 quantile: a fix of a train at s lies above s plus

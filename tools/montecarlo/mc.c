@@ -1112,8 +1112,10 @@ static const scenario_t scenarios[] = {
     {.name = "stops-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
     {.name = "restart-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .restart_after_s = 1000.0},
     {.name = "tracgap-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .trac_gap_at_s = 1010.0},
-    /* the stop's step under Student-t fixes (the grid engine: its cells take the step's variance) */
+    /* the stop's step under Student-t fixes and under heavy-mix's multipath mixture, and the step at
+     * 300 km/h under Student-t fixes (the grid engine: its cells take the step's variance) */
     {.name = "stopstep12-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
+    {.name = "stopstep12-mix", .paper_case = 4, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
     {.name = "fixbias20-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},
     {.name = "off15-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .perturb = 0.15},
     {.name = "grade8-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .grade_permille = 8.0},

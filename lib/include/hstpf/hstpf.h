@@ -374,7 +374,12 @@ typedef struct {
      *  that fitted is held (HSTPF_E_OUTLIER, not valid), and the next one
      *  beyond its 2^-11 quantiles on the same side at about the same
      *  offset moves the position by their mean
-     *  (hstpf_estimate_t.fix_steps). Moving or at rest; not across a long
+     *  (hstpf_estimate_t.fix_steps). Under a fix noise with heavier
+     *  tails (its 2^-17 quantiles beyond 6.5 of its sd on both sides:
+     *  Student-t, multipath mixtures) the last 2-6 fixes used, on one side
+     *  after one that fitted, are a step when it explains them by 20 nats
+     *  of the noise's density. Every engine's positions take the step's
+     *  variance. Moving or at rest; not across a long
      *  step, while the traction is in doubt, or with gate_m 0. 0: every
      *  fix within gate_m is used (docs/model.md, "A step in the fixes"). */
     uint8_t fix_step;
@@ -698,7 +703,7 @@ typedef struct {
 /* A step in the fixes' reference (fix_step.c). */
 typedef struct {
     double d;        /* the held fix less the prediction, m */
-    hstpf_real_t run[5]; /* the last fixes used less their predictions, newest first (a run of them: a step) */
+    hstpf_real_t run[7]; /* the last fixes used less their predictions, newest first (a run of them: a step) */
     uint32_t steps;  /* steps taken */
     uint8_t pend;    /* the last fix was held as a possible step's first */
     int8_t side;     /* where the last fix used lay: -1 / 1 beyond the prediction's reach, 0 within, 2 unknown */
