@@ -127,7 +127,7 @@ static void take_step(hstpf_t *f, double step, double v)
 static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
 {
     const real *r = f->fs.run, mean = (real)f->noise_mom[4];
-    real sum = 0, llr = 0;
+    real sum = 0, llr = 0, pair = 0;
     int i, side;
     for (i = 0; i < k; ++i) {
         sum += r[i];
@@ -141,13 +141,23 @@ static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
     /* each scored as if the prediction were exact, its spread taken out
      * by shrinking the offsets as a Gaussian's would be: + log p(e - step)
      * (i even) - log p(e) (i odd), e the noise if the reference did not
-     * move (one call of the inlined density: flash) */
+     * move (one call of the inlined density: flash). Each fix must favour
+     * the step: one wild fix (a Student-t's 277 m) carried a run's mean and
+     * its evidence alone, and the position stepped 141 m (stopstep12-t,
+     * China Star, seed 33). */
     for (i = 0; i < 2 * k; ++i) {
         const real e = r[i / 2] - mean;
+        const real lp = hstpf__dist_logpdf(&f->de, mean + shrink * (e - (i & 1 ? (real)0 : *step)));
         if ((e > (real)0 ? 1 : -1) != side) {
             return 0;
         }
-        llr += (i & 1 ? (real)-1 : (real)1) * hstpf__dist_logpdf(&f->de, mean + shrink * (e - (i & 1 ? (real)0 : *step)));
+        if (!(i & 1)) {
+            pair = lp;
+        } else if (!(pair > lp)) {
+            return 0;
+        } else {
+            llr += pair - lp;
+        }
     }
     return llr >= (real)RUN_LLR;
 }
