@@ -103,6 +103,7 @@ typedef struct {
     double gap_ev_max;          /* max |speed error| at a valid step in that window, m/s */
     double gap_tv;              /* total variation of the weights across the gap */
     long still_moving;          /* steps published at standstill while the train moved (whole run) */
+    long moving_still;          /* valid steps published moving (not at standstill, over 0.3 m/s) while the train stood */
     long v_bad;                 /* valid steps whose speed was more than 5 sd and 0.3 m/s off (whole run) */
     long trac_fault;            /* steps with traction_fault raised */
     double trac_cusum_max;      /* the traction check's largest CUSUM while it believed the traction, nats */
@@ -759,6 +760,7 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
             }
         }
         jr->still_moving += est.standstill && smp.v > 0.0;
+        jr->moving_still += est.valid && !est.standstill && smp.v == 0.0 && (double)est.speed_mps > 0.3;
         jr->trac_fault += est.traction_fault;
         if (!est.traction_fault && f->tc.cusum > jr->trac_cusum_max) {
             jr->trac_cusum_max = f->tc.cusum; /* the library's private state: how near a false alarm came */
@@ -1145,8 +1147,8 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
     long t_false = 0, t_rest = 0, t_out = 0, t_pairbad = 0, t_pairruns = 0, t_assert = 0;
     long t_fs = 0;
     long t_outl = 0, t_reacq = 0, t_cp = 0, t_cv = 0, t_n = 0, o_cp = 0, o_cv = 0, o_n = 0;
-    long t_still = 0, t_vbad = 0, t_tf = 0;
-    int n_still = 0, n_vbad = 0, n_tf = 0;
+    long t_still = 0, t_vbad = 0, t_tf = 0, t_mst = 0;
+    int n_still = 0, n_vbad = 0, n_tf = 0, n_mst = 0;
     double t_cmax = 0.0;
     double o_pe = 0.0;
     double t_vmin = HUGE_VAL, t_wmean = 0.0, t_wmax = 0.0, t_pemax = 0.0, t_acq = 0.0;
@@ -1208,6 +1210,8 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
             o_pe = q->out_pe_max > o_pe ? q->out_pe_max : o_pe;
             t_still += q->still_moving;
             n_still += q->still_moving > 0;
+            t_mst += q->moving_still;
+            n_mst += q->moving_still > 0;
             t_vbad += q->v_bad;
             n_vbad += q->v_bad > 0;
             t_tf += q->trac_fault;
@@ -1280,12 +1284,12 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
                         "],\"v_min_rest\":%.4g,\"pe10\":%.4g,\"pe_max_after\":%.4g,\"outliers\":%u,"
                         "\"reacquired\":%u,\"acquisitions\":%u,\"cover_p\":%.4f,\"cover_v\":%.4f,"
                         "\"assert_fail\":%ld,\"outage_s\":%.0f,\"out_pe_max\":%.4g,\"pos_rms\":%.4g,\"spd_rms\":%.4g,"
-                        "\"still_moving\":%ld,\"v_bad\":%ld,\"trac_fault\":%ld,\"trac_cusum_max\":%.4g,\"fix_steps\":%u",
+                        "\"still_moving\":%ld,\"moving_still\":%ld,\"v_bad\":%ld,\"trac_fault\":%ld,\"trac_cusum_max\":%.4g,\"fix_steps\":%u",
                         q->v_min_rest < HUGE_VAL ? q->v_min_rest : 0.0, q->pe10, q->pe_max_after,
                         (unsigned)q->outliers, (unsigned)q->reacquired, (unsigned)q->acquisitions,
                         q->n_cover ? (double)q->cover_p / (double)q->n_cover : 0.0,
                         q->n_cover ? (double)q->cover_v / (double)q->n_cover : 0.0, q->assert_fail,
-                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->v_bad, q->trac_fault, q->trac_cusum_max,
+                        q->outage_s, q->out_pe_max, r->pos_rms, r->spd_rms, q->still_moving, q->moving_still, q->v_bad, q->trac_fault, q->trac_cusum_max,
                         (unsigned)q->fix_steps);
                 if (w->sc->restart_after_s > 0.0) {
                     fprintf(jf, ",\"restart_t\":%.0f,\"revalid_s\":%.0f,\"restart_valid\":%.4f,\"restart_pe_max\":%.4g",
@@ -1324,6 +1328,9 @@ static void print_journey(const work_t *w, const hstpf_theta_t *models, const in
            "5 sd and 0.3 m/s off: %ld in %d runs; the traction taken for wrong (traction_fault) at %ld steps in %d "
            "runs, its CUSUM while the traction was believed at most %.2f nats\n",
            t_still, n_still, t_vbad, n_vbad, t_tf, n_tf, t_cmax);
+    printf("moving published while the train stood (valid, not at standstill, speed over 0.3 m/s): %ld steps in %d "
+           "runs\n",
+           t_mst, n_mst);
     if (w->sc->trac_gap_at_s > 0.0) { /* the traction unit silent across a departure */
         double *tvg = malloc(sizeof(double) * (size_t)all);
         long bad = 0, still = 0;
