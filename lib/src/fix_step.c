@@ -23,9 +23,11 @@
  * is 50 of its scales): no single fix is beyond them, and a 12 m step at a
  * platform was taken for the train moving off at 0.7 m/s, published valid
  * for a minute (hstpf-mc --scenario stopstep12-t). There a run of fixes
- * tells: the last 2-6 used, on one side after one that fitted, are a step
- * when "the reference moved by their mean offset" explains them better
- * than "it did not" by RUN_LLR nats under the fix noise's own density. */
+ * tells: the last 2-6 used, on one side after one that fitted, level, each
+ * favouring it, are a step when "the reference moved by their mean
+ * offset" explains them better than "it did not" by RUN_LLR nats under the
+ * fix noise's own density; ahead of a bank at standstill only all six (a
+ * train leaving under a reported brake is the release's). */
 #include <math.h>
 
 #include "bank.h"
@@ -57,6 +59,11 @@
  * impossible, which any step then explains (stops-case2: 786 false steps
  * in 340 runs) */
 #define RUN_HEAVY_Z (1.5 * HOLD_Z)
+#define RUN_SLOPE_Z 2.0 /* a flat run's slope lies beyond it in 2.3 % (a Gaussian's) */
+typedef char hstpf__run_fits[sizeof(((hstpf_fix_step_t *)0)->run) == (RUN_MAX + 1) * sizeof(real) &&
+                                     sizeof(((hstpf_fix_step_t *)0)->run_dt) == (RUN_MAX + 1) * sizeof(real)
+                                 ? 1
+                                 : -1];
 typedef char hstpf__step_tails_fit[FIT_TAIL < HSTPF_DIST_TAILN && RANGE_TAIL < HSTPF_DIST_TAILN &&
                                            HOLD_TAIL < STEP_TAIL && STEP_TAIL < FIT_TAIL
                                        ? 1
@@ -123,8 +130,9 @@ static void take_step(hstpf_t *f, double step, double v)
 }
 
 /* Whether the last k fixes used (k >= 2, the one before them too) are a
- * step; its size into *step. In float: the M4F's double is soft-float. */
-static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
+ * step; its size into *step. In float where it can be: the M4F's double
+ * is soft-float. */
+static int run_is_step(const hstpf_t *f, int k, real shrink, real spread, real *step)
 {
     const real *r = f->fs.run, mean = (real)f->noise_mom[4];
     real sum = 0, llr = 0, pair = 0;
@@ -137,6 +145,43 @@ static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
     /* one side, after a fix that fitted: a jump, not dynamics that drift */
     if (beyond(f, (double)r[k], 0.0, FIT_TAIL, 0.0) == side) {
         return 0;
+    }
+    /* ahead of a bank at standstill, the whole run: a train leaving while
+     * the brake is still reported gives that too, and four Student-t fixes
+     * of it lay level by chance (test_fix_step_heavy's departure, seed
+     * 10); over six its ramp shows (the release's, traction_check.c) */
+    if (side > 0 && f->standstill && k < RUN_MAX) {
+        return 0;
+    }
+    /* and flat: the fixes against the run's first prediction carried on
+     * at its speed (a held bank's prediction follows the fixes with a lag,
+     * so that the offsets of a train leaving while the brake is still
+     * reported stay level: test_fix_step_heavy's departure), their
+     * least-squares slope over time not beyond RUN_SLOPE_Z of its sd in
+     * the step's direction, the noise's spread taken robustly (its
+     * quartiles: a Student-t(3)'s sd is 1.7 of its scale, its quartiles'
+     * 1.1) with the prediction's. A train that leaves under a reported
+     * brake, or a traction stuck or swapped, drags the fixes along a
+     * ramp, and a heavy-tailed noise's fix before the run fits far out (a
+     * review: late60, stuck30 and tracsign under such fixes took ramps
+     * for steps) */
+    {
+        const real *p = f->fs.run_p, *v = f->fs.run_v, *dt = f->fs.run_dt;
+        real a[RUN_MAX], tt[RUN_MAX], am = 0, tm = 0, sxy = 0, sxx = 0, t = 0;
+        for (i = k - 1; i >= 0; --i) {
+            t += i < k - 1 ? dt[i] : (real)0;
+            tt[i] = t;
+            a[i] = r[i] + p[i] - (p[k - 1] + v[k - 1] * t);
+            am += a[i] / (real)k;
+            tm += t / (real)k;
+        }
+        for (i = 0; i < k; ++i) {
+            sxy += (tt[i] - tm) * (a[i] - am);
+            sxx += (tt[i] - tm) * (tt[i] - tm);
+        }
+        if ((real)side * sxy > (real)RUN_SLOPE_Z * spread * (real)sqrt((double)sxx)) {
+            return 0; /* slope sxy / sxx against its sd spread / sqrt(sxx) */
+        }
     }
     /* each scored as if the prediction were exact, its spread taken out
      * by shrinking the offsets as a Gaussian's would be: + log p(e - step)
@@ -165,13 +210,15 @@ static int run_is_step(const hstpf_t *f, int k, real shrink, real *step)
 /* A run of fixes that the filters used, each beyond the noise's usual but
  * none beyond its reach: d joins the run; a step is taken when the run
  * shows one. */
-static void run_rule(hstpf_t *f, double d, double var)
+static void run_rule(hstpf_t *f, double d, double var, double pred, double dt)
 {
     hstpf_fix_step_t *s = &f->fs;
     const hstpf_dist_quantiles_t *q = &f->de.qt;
     const real sd = (real)f->noise_mom[5], med = hstpf__dist_sample(q, 0x80000000u);
     const real hold_hi = q->tail_hi[HOLD_TAIL] - med, hold_lo = med - q->tail_lo[HOLD_TAIL];
     const real shrink = sd / (real)sqrt((double)(sd * sd) + var);
+    const real iq = (hstpf__dist_sample(q, 0xC0000000u) - hstpf__dist_sample(q, 0x40000000u)) / (real)1.349;
+    const real spread = (real)sqrt((double)(iq * iq) + var);
     const real reach = (real)(STEP_RANGES * hstpf__dist_range(q, RANGE_TAIL));
     int k;
     if (!((hold_hi < hold_lo ? hold_hi : hold_lo) > (real)RUN_HEAVY_Z * sd)) {
@@ -179,12 +226,18 @@ static void run_rule(hstpf_t *f, double d, double var)
     }
     for (k = RUN_MAX; k > 0; --k) {
         s->run[k] = s->run[k - 1];
+        s->run_p[k] = s->run_p[k - 1];
+        s->run_v[k] = s->run_v[k - 1];
+        s->run_dt[k] = s->run_dt[k - 1];
     }
     s->run[0] = (real)d;
+    s->run_p[0] = (real)pred;
+    s->run_v[0] = (real)((pred - hstpf__blended_position(f, 0.0, NULL)) / dt); /* the blend's speed */
+    s->run_dt[0] = (real)dt;
     s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
     for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
         real step;
-        if (run_is_step(f, k, shrink, &step) && fabs((double)step) <= (double)reach) {
+        if (run_is_step(f, k, shrink, spread, &step) && fabs((double)step) <= (double)reach) {
             take_step(f, (double)step, (double)(sd * sd) / (double)k);
             f->fs.side = (int8_t)beyond(f, d - (double)step, var, FIT_TAIL, FIT_Z);
             return;
@@ -192,8 +245,8 @@ static void run_rule(hstpf_t *f, double d, double var)
     }
 }
 
-/* The step rule on d = the fix less the prediction (variance var). */
-static int fix_step(hstpf_t *f, double d, double var, double dt)
+/* The step rule on d = the fix less the prediction pred (variance var). */
+static int fix_step(hstpf_t *f, double d, double var, double dt, double pred)
 {
     const int pend = f->fs.pend, side = f->fs.side;
     int out;
@@ -227,7 +280,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt)
          * that is not its step is held in its turn (a run of them
          * re-acquires: reacquire_after) */
         f->fs.side = (int8_t)beyond(f, d, var, FIT_TAIL, FIT_Z);
-        run_rule(f, d, var);
+        run_rule(f, d, var, pred, dt);
         return 0;
     }
     f->fs.run_n = 0;
@@ -242,7 +295,8 @@ int hstpf__fix_gate(hstpf_t *f, double y, double dt)
      * (no sqrt: the M4F's double is soft-float) */
     const double acc = 0.5 * STEP_ACC * dt * dt;
     double var;
-    const double d = y - f->origin_m - hstpf__blended_position(f, dt, &var);
+    const double pred = hstpf__blended_position(f, dt, &var);
+    const double d = y - f->origin_m - pred;
     var += acc * acc;
     if (fabs(d) > f->cfg.gate_m) {
         f->fs.pend = 0;
@@ -250,5 +304,5 @@ int hstpf__fix_gate(hstpf_t *f, double y, double dt)
         f->fs.run_n = 0;
         return 1;
     }
-    return f->cfg.fix_step ? fix_step(f, d, var, dt) : 0;
+    return f->cfg.fix_step ? fix_step(f, d, var, dt, pred) : 0;
 }

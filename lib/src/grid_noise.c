@@ -191,47 +191,53 @@ void hstpf__grid_diffuse(hstpf_t *f, uint16_t l, real scale, const real *ng)
 
 void hstpf__grid_spread(hstpf_t *f, uint16_t k, double var)
 {
-    real *g = f->grid.geom[k], *p = f->grid.p[k], *mat = f->grid.work, *t = f->grid.row;
-    const real sd = (real)sqrt(var);
+    real *g = f->grid.geom[k], *p = f->grid.p[k], *w = f->grid.work, *sh = f->grid.row, *rest = f->grid.rest[k];
+    real *rw = f->grid.rnew; /* free outside a step, as work is */
+    const double sd = sqrt(var), ds = ((double)NS * (double)g[1] + 2.0 * SPREAD_REACH * sd) / (double)NS;
+    /* the kernel's own variance: the cells' masses at their centres gain
+     * ds^2 / 12 from the kernel's cells and ds^2 / 12 from the moments'
+     * uniform cells, and lose the old cells' ds_old^2 / 12, so that the
+     * moments' variance grows by var */
+    const double kv = var - ds * ds / 6.0 + (double)g[1] * (double)g[1] / 12.0;
+    const real ks = (real)sqrt(kv > 0.25 * var ? kv : 0.25 * var);
     /* the new cells: the old box widened by SPREAD_REACH sd each side,
      * centred on it */
-    const real ds = ((real)NS * g[1] + (real)(2.0 * SPREAD_REACH) * sd) / (real)NS;
-    const real s0 = g[0] + (real)0.5 * (real)NS * (g[1] - ds);
+    const real s0 = g[0] + (real)0.5 * (real)NS * (g[1] - (real)ds);
     int i, c, j;
-    if (!(sd > (real)0 && g[1] > (real)0 && ds - ds == (real)0)) {
+    if (!(sd > 0.0 && g[1] > (real)0 && ds - ds == 0.0 && s0 - s0 == (real)0)) {
         return;
     }
-    /* mat[c NS + i]: the share of old cell c (its mass at its centre, as
-     * the moments take it) that N(0, var) moves into new cell i; each old
-     * cell's shares sum to 1, so the mass stays exactly */
+    memset(w, 0, sizeof(real) * NS * NV);
+    memset(rw, 0, sizeof f->grid.rnew);
     for (c = 0; c < NS; ++c) {
+        /* sh[i]: the share of old cell c, taken at its centre, that the
+         * kernel moves into new cell i; they sum to 1, so the mass stays */
         const real x = g[0] + ((real)c + (real)0.5) * g[1];
         real el, eh, sum = 0;
-        hstpf__grid_cdf2(&f->unit, (s0 - x) / sd, &el, &eh);
+        hstpf__grid_cdf2(&f->unit, (s0 - x) / ks, &el, &eh);
         for (i = 0; i < NS; ++i) {
             real ul, uh, q;
-            hstpf__grid_cdf2(&f->unit, (s0 + (real)(i + 1) * ds - x) / sd, &ul, &uh);
+            hstpf__grid_cdf2(&f->unit, (s0 + (real)(i + 1) * (real)ds - x) / ks, &ul, &uh);
             q = eh < (real)0.5 ? eh - uh : ul - el; /* as hstpf__grid_prob_in */
-            q = q > (real)0 ? q : (real)0;
-            mat[c * NS + i] = q;
-            sum += q;
+            sh[i] = q > (real)0 ? q : (real)0;
+            sum += sh[i];
             el = ul;
             eh = uh;
         }
         for (i = 0; i < NS; ++i) {
-            mat[c * NS + i] = sum > (real)0 ? mat[c * NS + i] / sum : (real)(i == NS / 2);
+            sh[i] = sum > (real)0 ? sh[i] / sum : (real)(i == NS / 2);
         }
-    }
-    for (j = 0; j <= NV; ++j) { /* each speed row, then the row at rest */
-        real *x = j < NV ? p + j * NS : f->grid.rest[k];
-        memset(t, 0, sizeof f->grid.row);
-        for (c = 0; c < NS; ++c) {
-            if (x[c] > (real)0) {
-                hstpf__grid_axpy_row(t, mat + c * NS, x[c]);
+        for (j = 0; j < NV; ++j) {
+            if (p[j * NS + c] > (real)0) {
+                hstpf__grid_axpy_row(w + j * NS, sh, p[j * NS + c]);
             }
         }
-        memcpy(x, t, sizeof f->grid.row);
+        if (rest[c] > (real)0) {
+            hstpf__grid_axpy_row(rw, sh, rest[c]);
+        }
     }
+    memcpy(p, w, sizeof(real) * NS * NV);
+    memcpy(rest, rw, sizeof f->grid.rnew);
     g[0] = s0;
-    g[1] = ds;
+    g[1] = (real)ds;
 }

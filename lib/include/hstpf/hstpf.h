@@ -703,7 +703,10 @@ typedef struct {
 /* A step in the fixes' reference (fix_step.c). */
 typedef struct {
     double d;        /* the held fix less the prediction, m */
-    hstpf_real_t run[7]; /* the last fixes used less their predictions, newest first (a run of them: a step) */
+    /* the last fixes used, newest first (a run of them: a step): each less
+     * its prediction, the prediction (from the origin), the speed before
+     * it and the time since the fix before */
+    hstpf_real_t run[7], run_p[7], run_v[7], run_dt[7];
     uint32_t steps;  /* steps taken */
     uint8_t pend;    /* the last fix was held as a possible step's first */
     int8_t side;     /* where the last fix used lay: -1 / 1 beyond the prediction's reach, 0 within, 2 unknown */
