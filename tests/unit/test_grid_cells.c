@@ -220,23 +220,30 @@ static void test_speed_lattice_by_hand(void **state)
 
 static hstpf_t gf; /* static, as on a target */
 
-static void test_moments_by_hand(void **state)
+/* A grid-engine instance of three rows, grid 0's cells emptied: its
+ * moving cells, its row at rest and its geometry into *p, *rest, *g. */
+static void grid_empty(hstpf_real_t **p, hstpf_real_t **rest, hstpf_real_t **g)
 {
     static const char *const names[] = {"CRH1", "CRH3", "CRH5"};
-    hstpf_theta_t rows[3];
+    static hstpf_theta_t rows[3];
     hstpf_config_t c;
-    hstpf_real_t *p, *rest, *g;
-    const hstpf_real_t h = (hstpf_real_t)0.5 * (hstpf_real_t)(1.0 + 4e-7);
-    (void)state;
     tu_config_rows(&c, rows, names, 3);
     c.engine = HSTPF_ENGINE_GRID;
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
-    p = gf.grid.p[0];
-    rest = gf.grid.rest[0];
-    g = gf.grid.geom[0];
-    memset(p, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS * HSTPF_GRID_NV);
-    memset(rest, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS);
+    *p = gf.grid.p[0];
+    *rest = gf.grid.rest[0];
+    *g = gf.grid.geom[0];
+    memset(*p, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS * HSTPF_GRID_NV);
+    memset(*rest, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS);
+}
+
+static void test_moments_by_hand(void **state)
+{
+    hstpf_real_t *p, *rest, *g;
+    const hstpf_real_t h = (hstpf_real_t)0.5 * (hstpf_real_t)(1.0 + 4e-7);
+    (void)state;
+    grid_empty(&p, &rest, &g);
     g[0] = 1000; /* positions from 1000 m, cells of 1 mm; speeds from 80 m/s, 2 mm/s */
     g[1] = (hstpf_real_t)0.001;
     g[2] = 80;
@@ -284,20 +291,9 @@ static void test_moments_by_hand(void **state)
  * old cell went to the new ones as a point with the kernel of v). */
 static void spread_case(double cell, double v)
 {
-    static const char *const names[] = {"CRH1", "CRH3", "CRH5"};
-    hstpf_theta_t rows[3];
-    hstpf_config_t c;
     hstpf_real_t *p, *rest, *g;
     double s_mean, s_var, v_mean, v_var, width;
-    tu_config_rows(&c, rows, names, 3);
-    c.engine = HSTPF_ENGINE_GRID;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&gf, sizeof gf, &c), HSTPF_OK);
-    p = gf.grid.p[0];
-    rest = gf.grid.rest[0];
-    g = gf.grid.geom[0];
-    memset(p, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS * HSTPF_GRID_NV);
-    memset(rest, 0, sizeof(hstpf_real_t) * HSTPF_GRID_NS);
+    grid_empty(&p, &rest, &g);
     g[0] = 1000;
     g[1] = (hstpf_real_t)cell;
     g[2] = 0;
