@@ -603,7 +603,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     }
     hstpf__update_declaration(f, in->dt_s, weigh);
     {
-        const double rel = hstpf__blended_position(f, 0.0, NULL); /* one blend for both (soft-float exp on the M4F) */
+        const double rel = hstpf__blended_position(f, 0.0, NULL, NULL); /* one blend for both (soft-float exp on the M4F) */
         const double s_m = f->origin_m + rel;
         hstpf__rebase(f, rel);
         if (has_y && hstpf__ran_backwards(f, s_m, in->position_m)) {

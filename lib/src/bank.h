@@ -93,8 +93,8 @@ void hstpf__blend_weights(const hstpf_t *f, double *wb);
 /* The blend's position dt_ahead on (s + T v of each hypothesis, relative
  * to the origin); var, if not NULL, a bound on its variance: each
  * hypothesis' 2 (pss + T^2 pvv), which (sd_s + T sd_v)^2 never exceeds,
- * and the spread between them. */
-double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var);
+ * and the spread between them; speed, if not NULL, the blend's speed. */
+double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var, double *speed);
 /* The bank's predictive log-likelihood of this step's fix: the weighted
  * hypotheses' increments mixed by the weights before the step's update. */
 double hstpf__bank_loglik(const hstpf_t *f);

@@ -46,9 +46,9 @@ double hstpf__bank_loglik(const hstpf_t *f)
     return mx + log(sum);
 }
 
-double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var)
+double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var, double *speed)
 {
-    double s = 0.0, m2 = 0.0, pv = 0.0, ps, wb[HSTPF_MAX_MODELS + 1];
+    double s = 0.0, m2 = 0.0, pv = 0.0, sv = 0.0, ps, wb[HSTPF_MAX_MODELS + 1];
     const double t2 = dt_ahead * dt_ahead;
     uint16_t l;
     hstpf__blend_weights(f, wb);
@@ -56,6 +56,7 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var)
         const hstpf_model_t *m = &f->m[l];
         ps = (double)m->s_mean + dt_ahead * (double)m->v_mean;
         s += wb[l] * ps;
+        sv += wb[l] * (double)m->v_mean;
         if (var != NULL) {
             m2 += wb[l] * ps * ps;
             pv += wb[l] * 2.0 * ((double)m->s_var + t2 * (double)m->v_var);
@@ -67,6 +68,7 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var)
         hstpf__refine_sv(f, &rs, &rv, &pss, &pvv);
         ps = rs + dt_ahead * rv;
         s += w * ps;
+        sv += w * rv;
         if (var != NULL) {
             m2 += w * ps * ps;
             pv += w * 2.0 * (pss + t2 * pvv);
@@ -74,6 +76,9 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var)
     }
     if (var != NULL) {
         *var = pv + (m2 > s * s ? m2 - s * s : 0.0);
+    }
+    if (speed != NULL) {
+        *speed = sv;
     }
     return s;
 }

@@ -210,7 +210,7 @@ static int run_is_step(const hstpf_t *f, int k, real shrink, real spread, real *
 /* A run of fixes that the filters used, each beyond the noise's usual but
  * none beyond its reach: d joins the run; a step is taken when the run
  * shows one. */
-static void run_rule(hstpf_t *f, double d, double var, double pred, double dt)
+static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, double dt)
 {
     hstpf_fix_step_t *s = &f->fs;
     const hstpf_dist_quantiles_t *q = &f->de.qt;
@@ -232,7 +232,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double dt)
     }
     s->run[0] = (real)d;
     s->run_p[0] = (real)pred;
-    s->run_v[0] = (real)((pred - hstpf__blended_position(f, 0.0, NULL)) / dt); /* the blend's speed */
+    s->run_v[0] = (real)vel; /* the blend's speed, from its one pass (the M4F's soft-float exp) */
     s->run_dt[0] = (real)dt;
     s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
     for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
@@ -246,7 +246,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double dt)
 }
 
 /* The step rule on d = the fix less the prediction pred (variance var). */
-static int fix_step(hstpf_t *f, double d, double var, double dt, double pred)
+static int fix_step(hstpf_t *f, double d, double var, double dt, double pred, double vel)
 {
     const int pend = f->fs.pend, side = f->fs.side;
     int out;
@@ -280,7 +280,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt, double pred)
          * that is not its step is held in its turn (a run of them
          * re-acquires: reacquire_after) */
         f->fs.side = (int8_t)beyond(f, d, var, FIT_TAIL, FIT_Z);
-        run_rule(f, d, var, pred, dt);
+        run_rule(f, d, var, pred, vel, dt);
         return 0;
     }
     f->fs.run_n = 0;
@@ -295,7 +295,8 @@ int hstpf__fix_gate(hstpf_t *f, double y, double dt)
      * (no sqrt: the M4F's double is soft-float) */
     const double acc = 0.5 * STEP_ACC * dt * dt;
     double var;
-    const double pred = hstpf__blended_position(f, dt, &var);
+    double vel;
+    const double pred = hstpf__blended_position(f, dt, &var, &vel);
     const double d = y - f->origin_m - pred;
     var += acc * acc;
     if (fabs(d) > f->cfg.gate_m) {
@@ -304,5 +305,5 @@ int hstpf__fix_gate(hstpf_t *f, double y, double dt)
         f->fs.run_n = 0;
         return 1;
     }
-    return f->cfg.fix_step ? fix_step(f, d, var, dt, pred) : 0;
+    return f->cfg.fix_step ? fix_step(f, d, var, dt, pred, vel) : 0;
 }
