@@ -41,6 +41,8 @@ void hstpf__nonfinite_reset(hstpf_t *f);
  * as a possible step in the fixes' reference (cfg.fix_step); 0: used (the
  * origin moved first when it completes a step). */
 int hstpf__fix_gate(hstpf_t *f, double y, double dt);
+/* The step rule's run of predictions, from an origin moved by +d (rebase). */
+void hstpf__fix_step_shift(hstpf_t *f, hstpf_real_t d);
 
 /* declare.c */
 void hstpf__update_declaration(hstpf_t *f, double dt, int evidence);

@@ -56,7 +56,9 @@ double hstpf__blended_position(const hstpf_t *f, double dt_ahead, double *var, d
         const hstpf_model_t *m = &f->m[l];
         ps = (double)m->s_mean + dt_ahead * (double)m->v_mean;
         s += wb[l] * ps;
-        sv += wb[l] * (double)m->v_mean;
+        if (speed != NULL) {
+            sv += wb[l] * (double)m->v_mean;
+        }
         if (var != NULL) {
             m2 += wb[l] * ps * ps;
             pv += wb[l] * 2.0 * ((double)m->s_var + t2 * (double)m->v_var);

@@ -289,6 +289,14 @@ static int fix_step(hstpf_t *f, double d, double var, double dt, double pred, do
     return 1;
 }
 
+void hstpf__fix_step_shift(hstpf_t *f, real d)
+{
+    int i;
+    for (i = 0; i <= RUN_MAX; ++i) {
+        f->fs.run_p[i] -= d;
+    }
+}
+
 int hstpf__fix_gate(hstpf_t *f, double y, double dt)
 {
     /* the blend's prediction, and what the acceleration it leaves out adds

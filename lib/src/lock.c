@@ -232,12 +232,7 @@ void hstpf__rebase(hstpf_t *f, double rel)
     f->rf.kz[0] -= (double)d;
     f->rf.rest.s -= d;
     hstpf__trac_check_shift(f, (double)d);
-    {
-        int i;
-        for (i = 0; i < (int)(sizeof f->fs.run_p / sizeof f->fs.run_p[0]); ++i) {
-            f->fs.run_p[i] -= d; /* the step rule's run, from the new origin */
-        }
-    }
+    hstpf__fix_step_shift(f, d);
     f->origin_m += (double)d;
     hstpf__track_rebase(f);
 }
