@@ -77,7 +77,7 @@ for s in tracsign gain-20; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"
 done
 # steps in the fixes' reference (a GNSS bias, lone outliers), with cfg.fix_step and without it
-for s in fixbias20 spikes20 stopstep12 stopstep-12 stopstep12-t stopstep12-mix fixbias20-t late60-t; do
+for s in fixbias20 fixbias14 fixbias10 spikes20 stopstep12 stopstep-12 stopstep12-t stopstep12-mix fixbias20-t late60-t; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-fix-step | tee "$out/$s-nostep.txt"

@@ -27,7 +27,9 @@
  * favouring it, are a step when "the reference moved by their mean
  * offset" explains them better than "it did not" by RUN_LLR nats under the
  * fix noise's own density; ahead of a bank at standstill only all six (a
- * train leaving under a reported brake is the release's). */
+ * train leaving under a reported brake is the release's). A Gaussian's
+ * run is a step only behind a bank at standstill: a step the hold rule
+ * missed there left the traction blamed for minutes (fixbias10). */
 #include <math.h>
 
 #include "bank.h"
@@ -50,15 +52,22 @@
 /* a run's evidence for a step: a Gaussian's GLR exceeds it by chance
  * with P(chi2_1 > 40) = 2.5e-10 per run tried */
 #define RUN_LLR 20.0
-/* the run rule is for noises whose hold quantiles lie beyond this many sd
- * on both sides (a Gaussian's: HOLD_Z): a Gaussian's evidence grows with
- * the square of an offset, so a drift (a train leaving while the brake is
+/* The run rule is for noises whose hold quantiles lie beyond RUN_HEAVY_Z
+ * sd on both sides. A light tail beyond RUN_LIGHT_Z sd on both sides (a
+ * Gaussian's: HOLD_Z) has it only behind a bank at standstill: a step
+ * there that the hold rule missed (a -10 m step at a platform is 4.5 of
+ * Case 1's sd, and a prediction's spread lifts its reach) left the held
+ * models behind the fixes and the traction blamed for minutes (fixbias10,
+ * stopstep-12); ahead, and moving, a Gaussian's evidence grows with the
+ * square of an offset, so a drift (a train leaving while the brake is
  * reported) passes RUN_LLR within a few fixes (test_held_but_moving), and
- * the hold rule already sees its steps of 4.3 sd and more; a noise with an
+ * moving the filters take up a fix before a run can tell (fixbias10 at
+ * 300 km/h: 8 more steps in 340, no fewer wrong speeds). A noise with an
  * edge (the paper's Gamma) scores a prediction a few cm past it as
  * impossible, which any step then explains (stops-case2: 786 false steps
- * in 340 runs) */
+ * in 340 runs). */
 #define RUN_HEAVY_Z (1.5 * HOLD_Z)
+#define RUN_LIGHT_Z 3.0
 #define RUN_SLOPE_Z 2.0 /* a flat run's slope lies beyond it in 2.3 % (a Gaussian's) */
 typedef char hstpf__run_fits[sizeof(((hstpf_fix_step_t *)0)->run) == (RUN_MAX + 1) * sizeof(real) &&
                                      sizeof(((hstpf_fix_step_t *)0)->run_dt) == (RUN_MAX + 1) * sizeof(real)
@@ -132,7 +141,7 @@ static void take_step(hstpf_t *f, double step, double v)
 /* Whether the last k fixes used (k >= 2, the one before them too) are a
  * step; its size into *step. In float where it can be: the M4F's double
  * is soft-float. */
-static int run_is_step(const hstpf_t *f, int k, real shrink, real spread, real *step)
+static int run_is_step(const hstpf_t *f, int k, int light, real shrink, real spread, real *step)
 {
     const real *r = f->fs.run, mean = (real)f->noise_mom[4];
     real sum = 0, llr = 0, pair = 0;
@@ -151,6 +160,15 @@ static int run_is_step(const hstpf_t *f, int k, real shrink, real spread, real *
      * of it lay level by chance (test_fix_step_heavy's departure, seed
      * 10); over six its ramp shows (the release's, traction_check.c) */
     if (side > 0 && f->standstill && k < RUN_MAX) {
+        return 0;
+    }
+    /* a light tail: only behind a bank at standstill (run_rule), where no
+     * departure is mistaken for one (ahead, a Gaussian's evidence for a
+     * train leaving under a reported brake passes RUN_LLR within a few
+     * fixes: test_held_but_moving), and only the whole run, whose slope
+     * tells a train running backwards at 3 m/s from a step (over fewer,
+     * steps followed it, valid at rest: test_backward_fixes_not_valid) */
+    if (light && (side > 0 || k < RUN_MAX)) {
         return 0;
     }
     /* and flat: the fixes against the run's first prediction carried on
@@ -220,9 +238,12 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, 
     const real iq = (hstpf__dist_sample(q, 0xC0000000u) - hstpf__dist_sample(q, 0x40000000u)) / (real)1.349;
     const real spread = (real)sqrt((double)(iq * iq) + var);
     const real reach = (real)(STEP_RANGES * hstpf__dist_range(q, RANGE_TAIL));
+    const real tails = hold_hi < hold_lo ? hold_hi : hold_lo;
+    const int light = !(tails > (real)RUN_HEAVY_Z * sd);
     int k;
-    if (!((hold_hi < hold_lo ? hold_hi : hold_lo) > (real)RUN_HEAVY_Z * sd)) {
-        return; /* a light tail, or an edge: the hold rule's */
+    if (light && !(tails > (real)RUN_LIGHT_Z * sd && f->standstill)) {
+        s->run_n = 0; /* a run is of fixes in a row: not one from a stop before */
+        return;       /* an edge, or a light tail moving: the hold rule's */
     }
     for (k = RUN_MAX; k > 0; --k) {
         s->run[k] = s->run[k - 1];
@@ -237,7 +258,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, 
     s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
     for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
         real step;
-        if (run_is_step(f, k, shrink, spread, &step) && fabs((double)step) <= (double)reach) {
+        if (run_is_step(f, k, light, shrink, spread, &step) && fabs((double)step) <= (double)reach) {
             take_step(f, (double)step, (double)(sd * sd) / (double)k);
             f->fs.side = (int8_t)beyond(f, d - (double)step, var, FIT_TAIL, FIT_Z);
             return;

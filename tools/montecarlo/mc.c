@@ -1104,6 +1104,10 @@ static const scenario_t scenarios[] = {
     /* the fixes step by +20 m on the line at 300 km/h for 300 s (a GNSS bias); one fix in 150 s
      * 20 m off, the sign alternating (lone outliers) */
     {.name = "fixbias20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},
+    /* the same with +10 m and +14 m: steps within the hold rule's reach (4.3 sd of the noise with the
+     * prediction's) or just beyond it */
+    {.name = "fixbias10", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 10.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},
+    {.name = "fixbias14", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 14.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0},
     /* the same at the third station (at rest from about 1 450 to 1 570 s): +-12 m for 60 s from 1 480 s */
     {.name = "stopstep12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
     {.name = "stopstep-12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = -12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
