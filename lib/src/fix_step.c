@@ -165,10 +165,11 @@ static int run_is_step(const hstpf_t *f, int k, int light, real shrink, real spr
     /* a light tail: only behind a bank at standstill (run_rule), where no
      * departure is mistaken for one (ahead, a Gaussian's evidence for a
      * train leaving under a reported brake passes RUN_LLR within a few
-     * fixes: test_held_but_moving), and only the whole run, whose slope
-     * tells a train running backwards at 3 m/s from a step (over fewer,
-     * steps followed it, valid at rest: test_backward_fixes_not_valid) */
-    if (light && (side > 0 || k < RUN_MAX)) {
+     * fixes: test_held_but_moving); and only the whole run (run_rule),
+     * whose slope tells a train running backwards at 3 m/s from a step
+     * (over fewer, steps followed it, valid at rest:
+     * test_backward_fixes_not_valid) */
+    if (light && side > 0) {
         return 0;
     }
     /* and flat: the fixes against the run's first prediction carried on
@@ -256,7 +257,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, 
     s->run_v[0] = (real)vel; /* the blend's speed, from its one pass (the M4F's soft-float exp) */
     s->run_dt[0] = (real)dt;
     s->run_n = (uint8_t)(s->run_n + (s->run_n <= RUN_MAX));
-    for (k = 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
+    for (k = light ? RUN_MAX : 2; k <= RUN_MAX && k < (int)s->run_n; ++k) {
         real step;
         if (run_is_step(f, k, light, shrink, spread, &step) && fabs((double)step) <= (double)reach) {
             take_step(f, (double)step, (double)(sd * sd) / (double)k);
