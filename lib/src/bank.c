@@ -387,12 +387,12 @@ static void advance_time(hstpf_t *f, double dt)
     ++f->steps;
 }
 
-/* xi u (m/s^2) for a step whose traction is unknown: what balances the
- * largest resistance among the models at speed v (each model's own when
- * v < 0), plus a hair: the train neither speeds up nor slows down in the
- * mean, and no model holds it at rest (engine.h's rule needs a net force
- * <= 0 at v = 0). The models' spread in W is small against
- * accel_unknown_sd, and no weight moves on such a step. */
+/* xi u (m/s^2) for an acquisition whose traction is unknown: what
+ * balances the largest resistance among the models at speed v (each
+ * model's own when v < 0), plus a hair so that no model holds the train at
+ * rest (engine.h's rule needs a net force <= 0 at v = 0). Over the pair's
+ * second or so the models' spread in W is small against the pair's speed
+ * variance; a step's own is hstpf__step_xu's. */
 static double free_xu(const hstpf_t *f, double v)
 {
     double xu = -HUGE_VAL;
@@ -405,6 +405,18 @@ static double free_xu(const hstpf_t *f, double v)
         xu = w > xu ? w : xu;
     }
     return xu + 1e-3;
+}
+
+double hstpf__step_xu(const hstpf_t *f, const hstpf_model_t *m, const hstpf__step_t *st)
+{
+    uint16_t hint = 0;
+    double v, g;
+    if (!st->free_run) {
+        return st->xu;
+    }
+    v = (double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0;
+    g = f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, m->s_mean) : 0.0;
+    return (double)m->k0 + ((double)m->k1 + (double)m->k2 * v) * v + g + 1e-3;
 }
 
 /* One step of every model and of the continuous hypothesis. */
@@ -532,7 +544,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     trac_known = !free_run && !f->tc.release;
     /* a traction that cannot be right is not used, nor one that holds a train that moves */
     free_run = free_run || f->tc.fault || f->tc.release;
-    xu = free_run ? free_xu(f, -1.0) : f->xi * in->traction;
+    xu = free_run ? 0.0 : f->xi * in->traction; /* free: each model's own balance (hstpf__step_xu) */
     st.dt = in->dt_s;
     st.xu = xu;
     st.yr = has_y ? in->position_m - f->origin_m : 0.0;

@@ -14,7 +14,7 @@ typedef struct {
     double yr;        /* measured position relative to the origin, m */
     double scale;     /* noise scale sqrt(dt / dt_nominal) */
     int has_y;        /* a measurement this step */
-    int free_run;     /* the traction is unknown: xu balances the models' resistance (bank.c) */
+    int free_run;     /* the traction is unknown: each model's xu is its own balance (hstpf__step_xu) */
     double acc_var;   /* and the speed's variance this step from the unknown acceleration, (m/s)^2 (0 if known) */
 } hstpf__step_t;
 
@@ -74,6 +74,14 @@ extern const hstpf__engine_t hstpf__engine_grid;
 /* The Kalman engine's filter of one row on (s, v), m->kx and m->kp only,
  * with the noise moments f->noise_mom. The grid engine runs it beside its
  * cells as the continuous hypothesis' yardstick (refine.c). */
+/* xi u for model m this step: st->xu, or with the traction unknown what
+ * balances the model's own resistance and the track's force at its mean
+ * (s, v), plus a hair: its acceleration is then 0 in the mean and nothing
+ * holds it at rest (hstpf.h's traction_unknown). The largest resistance
+ * among the models, the balance before, sped every other model up by the
+ * difference: 30 s without inputs at 350 km/h put a CRH3 259 m ahead
+ * (5 sd) beside a DFH3 row (a review). */
+double hstpf__step_xu(const hstpf_t *f, const hstpf_model_t *m, const hstpf__step_t *st);
 void hstpf__kalman_place(hstpf_t *f, hstpf_model_t *m, const hstpf__acq_t *q);
 /* One step; returns the log-likelihood increment (0 without a
  * measurement), *held as hstpf_model_t.held, *floored 1 when the

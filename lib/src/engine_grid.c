@@ -315,7 +315,7 @@ static void model_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st)
     const uint16_t run = m->floor_run;
     const uint32_t hits = m->floor_hits;
     const real v_was = m->v_mean;
-    real acc = (real)st->xu;
+    real acc = (real)hstpf__step_xu(f, m, st);
     int has_mass;
     if (f->cfg.n_track > 0u) {
         acc -= hstpf__track_acc(f, &m->track_hint, m->s_mean);

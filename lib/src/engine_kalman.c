@@ -87,7 +87,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
     const double s = m->kx[0], v = m->kx[1];
     const double pss = m->kp[0], psv = m->kp[1], pvv = m->kp[2];
     const double sc2 = scale * scale;
-    const double a = accel(f, m, st->xu, s, v);
+    const double a = accel(f, m, hstpf__step_xu(f, m, st), s, v);
     const double vd = v + dt * a, fvv = 1.0 - dt * ((double)m->k1 + 2.0 * (double)m->k2 * v);
     double ns, nv, loglik = 0.0, qss, qsv, qvv, s_pred, p_pred;
     *held = (uint8_t)(v <= 0.0 && pvv <= 0.0 && a <= 0.0);

@@ -370,7 +370,7 @@ static void resample_paired(hstpf_t *f)
 static void predict_update(hstpf_t *f, const hstpf__step_t *st)
 {
     const int paired = paired_bank(f);
-    const real dt = (real)st->dt, xu = (real)st->xu, yr = (real)st->yr, scale = (real)st->scale;
+    const real dt = (real)st->dt, yr = (real)st->yr, scale = (real)st->scale;
     const real thr = (real)f->cfg.ess_threshold * (real)f->cfg.n_particles, acc_sd = (real)sqrt(st->acc_var);
     uint16_t l;
     if (paired) {
@@ -381,7 +381,7 @@ static void predict_update(hstpf_t *f, const hstpf__step_t *st)
         if (!paired) {
             draw_noise(f, &m->rng, scale, acc_sd);
         }
-        model_update(f, m, dt, xu, st->has_y, yr, f->scratch);
+        model_update(f, m, dt, (real)hstpf__step_xu(f, m, st), st->has_y, yr, f->scratch);
         if (!paired && st->has_y && (f->cfg.resample == HSTPF_RESAMPLE_ALWAYS || m->ess < thr)) {
             resample_own(f, m, f->scratch);
         }

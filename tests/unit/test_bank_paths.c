@@ -986,6 +986,57 @@ static void run_traction_gap(hstpf_engine_t engine, double dt, int case2)
     }
 }
 
+/* Both inputs silent for 30 s at 350 km/h (a bus that drops out; hstpfd
+ * predicts with the traction unknown), a bank of CRH3 (the truth) and
+ * DFH3. The contract (hstpf.h's traction_unknown): the acceleration is
+ * taken as 0. Before, every model was given the traction that balances
+ * the largest resistance among them, DFH3's, so CRH3's sped up by xi (W_DFH3
+ * - W_CRH3) = 0.69 m/s^2 at 350 km/h: 21 m/s and 259 m (5 sd) after 30 s,
+ * valid (a review's harness). Expected by hand: each model's mean speed
+ * stays within 0.1 m/s (the hair, 1e-3 m/s^2, adds 0.03 m/s over 30 s; the
+ * resistance's slope at the mean restores the rest), or within 1 m/s on
+ * the particle engine (100 particles, each with the unknown
+ * acceleration's random walk of 0.5 m/s^2 and the speed noise's 0.22 m/s
+ * a step: the cloud's mean moves by about sqrt(0.25 + 0.05) sqrt(30 /
+ * 100) = 0.30 m/s, so 1 m/s is 3.3 of its sd); the published position
+ * within 3 of its sd of the truth (+1 m). */
+static void test_free_run_balance(void **state)
+{
+    int i, k, l;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e0, e;
+        const double v = 350.0 / 3.6, tol = engines[i] == HSTPF_ENGINE_PARTICLE ? 1.0 : 0.1;
+        base_config(&c, engines[i], 2);
+        rows[1] = hstpf_train_types[hstpf_train_type_find("DFH3")];
+        start(&c);
+        for (k = 1; k <= 330; ++k) {
+            hstpf_input_t in = tu_input(1.0, hstpf_resistance(&rows[0], v), Y0 + v * k + 2.0 * sin(1.7 * k), k <= 300);
+            in.traction_unknown = (uint8_t)(k > 300);
+            if (in.traction_unknown) {
+                in.traction = NAN;
+            }
+            assert_int_equal(hstpf_step(&f, &in), HSTPF_OK);
+            if (k == 300) {
+                e0 = est();
+                assert_true(e0.valid);
+            }
+        }
+        e = est();
+        for (l = 0; l < 2; ++l) {
+            if (fabs((double)e.model[l].speed_mps - (double)e0.model[l].speed_mps) > tol) {
+                fail_msg("engine %d, row %d: speed %.2f -> %.2f m/s in 30 s without inputs", (int)engines[i], l,
+                         (double)e0.model[l].speed_mps, (double)e.model[l].speed_mps);
+            }
+        }
+        if (e.valid && fabs(e.position_m - (Y0 + v * 330)) > 3.0 * e.position_sd_m + 1.0) {
+            fail_msg("engine %d: position %.1f m off (sd %.1f)", (int)engines[i], e.position_m - (Y0 + v * 330),
+                     e.position_sd_m);
+        }
+    }
+}
+
 static void test_traction_unknown(void **state)
 {
     int i;
@@ -1508,6 +1559,7 @@ int main(void)
         cmocka_unit_test(test_reference_restart_tracked),
         cmocka_unit_test(test_probation_guards),
         cmocka_unit_test(test_traction_unknown),
+        cmocka_unit_test(test_free_run_balance),
         cmocka_unit_test(test_traction_wrong), cmocka_unit_test(test_shadow_kept_when_nearer), cmocka_unit_test(test_shadow_at_rest_placed_back),
         cmocka_unit_test(test_runs_saturate),
         cmocka_unit_test(test_lost_model_redrawn),
