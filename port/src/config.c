@@ -147,4 +147,9 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     fc->traction_check = c->traction_check;
     fc->fix_step = c->fix_step;
     fc->consist_change_p = c->consist_change_p;
+    /* the daemon's gap rule (sched.c: a gap between positions beyond
+     * max_gap_s re-acquires) governs; the library's per-step one, left at
+     * its 30 s, dropped the lock at every step when step_period_s or
+     * predict_period_s was above it (up to HSTPF_DT_MAX_S), silently */
+    fc->max_gap_s = c->sched.max_gap_s < HSTPF_DT_MAX_S ? c->sched.max_gap_s : HSTPF_DT_MAX_S;
 }

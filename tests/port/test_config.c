@@ -88,6 +88,17 @@ static void test_set_numbers(void **state)
         hstpfd_config_filter(&cfg2, &fc);
         assert_int_equal(fc.refine, 2);
         assert_int_equal(hstpfd_config_set(&cfg2, "refine", "3", err, sizeof err), -1);
+        /* the daemon's max_gap_s reaches the library, within its (0, HSTPF_DT_MAX_S]: a
+         * step_period_s of 31-60 s was one gap per step to the library's 30 s default */
+        assert_true(fc.max_gap_s == HSTPF_DT_MAX_S); /* the daemon's 600 s */
+        assert_int_equal(hstpfd_config_set(&cfg2, "max_gap_s", "20", err, sizeof err), 0);
+        hstpfd_config_filter(&cfg2, &fc);
+        assert_true(fc.max_gap_s == 20.0);
+        assert_int_equal(hstpfd_config_set(&cfg2, "step_period_s", "45", err, sizeof err), 0);
+        assert_int_equal(hstpfd_config_set(&cfg2, "max_gap_s", "600", err, sizeof err), 0);
+        hstpfd_config_filter(&cfg2, &fc);
+        assert_true(fc.max_gap_s >= cfg2.sched.step_period_s);
+        assert_int_equal(hstpf_config_check(&fc, NULL), HSTPF_OK);
     }
     assert_int_equal(hstpfd_config_set(&cfg, "nosuchkey", "1", err, sizeof err), -1);
     assert_non_null(strstr(err, "unknown key 'nosuchkey'"));
