@@ -108,6 +108,33 @@ def test_input_aligned_replay_with_faults(sim, tmp_path):
     assert json.loads(js.read_text())["position_rms_m"] < 5.0
 
 
+def test_input_log_with_truncated_positions(sim, tmp_path):
+    """Position frames cut to 7 bytes in the input log (hstpf-replay
+    --truncate-window; hstpfd refuses them) and recorded beside the outputs:
+    the score skips them; it crashed with cantools' DecodeError (a review)."""
+    d, log, rows = sim
+    codec = FrameCodec()
+    inp, rec_msgs = [], []
+    for i, m in enumerate(read_log(str(log))):
+        data = bytes(m.data)
+        cut = m.arbitration_id == 0x100 and i % 53 == 0
+        if cut:
+            data = data[:7]
+        inp.append(message(m.timestamp, m.arbitration_id, data))
+        rec_msgs.append(message(1.7e9 + m.timestamp, m.arbitration_id, data))
+        if m.arbitration_id == 0x100 and not cut:
+            s = np.interp(m.timestamp, rows["time_s"], rows["position_m"])
+            v = np.interp(m.timestamp, rows["time_s"], rows["speed_mps"])
+            rec_msgs += [message(1.7e9 + m.timestamp + 0.0005, fid, dd) for fid, dd in outputs(codec, m.timestamp, s, v)]
+    il, rec, js = tmp_path / "in.log", tmp_path / "bus.log", tmp_path / "m.json"
+    write_log(str(il), inp)
+    write_log(str(rec), rec_msgs)
+    assert score.main([str(rec), "--truth", str(d / "run_truth.csv"), "--input-log", str(il), "--json", str(js)]) == 0
+    res = json.loads(js.read_text())
+    assert res["align"] == "inputs"
+    check_metrics(res)
+
+
 def declaration_log(path, n, t_declare, declared, weight, theta, theta_valid_before=None):
     """An estimator's EstType and EstTheta at 1 Hz for n s: undecided (255)
     until t_declare, then `declared` (a Table 1 index, or 254 for a custom

@@ -213,9 +213,12 @@ def collect(rec_msgs, codec: FrameCodec, align: str, inputs: Optional[InputLog],
         if m.arbitration_id == pos_id:
             t = match.get(idx)
             if t is not None:
+                try:
+                    p = pos_msg.decode(bytes(m.data), decode_choices=False)
+                except Exception:  # a truncated frame (hstpfd refuses it): no step, nothing to align to
+                    continue
                 t_sim = t
                 t_in = m.timestamp
-                p = pos_msg.decode(bytes(m.data), decode_choices=False)
                 fix_in = int(p["FixTime"]) if p.get("FixTimeValid", 0) >= 0.5 else None
                 if fix_in is not None:
                     fix_sim[fix_in] = t
