@@ -135,6 +135,22 @@ def test_input_log_with_truncated_positions(sim, tmp_path):
     check_metrics(res)
 
 
+def test_truth_theta_at_a_coupling(tmp_path):
+    """The theta plot compares each estimate with the truth's coefficients
+    at its time: CRH3 until 900 s, SS8 coupled from then on."""
+    p = tmp_path / "truth.csv"
+    lines = ["time_s,position_m,speed_mps,type,c0,c1,c2"]
+    for k in range(0, 1801, 300):
+        th, name = (CRH3, "CRH3") if k < 900 else (SS8, "SS8")
+        lines.append(f"{k},{k * 50.0},50.0,{name},{th[0]},{th[1]},{th[2]}")
+    p.write_text("\n".join(lines) + "\n")
+    truth = score.read_truth(str(p))
+    c0, c1, c2 = score.truth_theta_at(truth, np.array([-5.0, 0.0, 600.0, 899.9, 900.0, 1500.0, 1900.0]))
+    assert list(c0) == [CRH3[0]] * 4 + [SS8[0]] * 3
+    assert list(c2) == [CRH3[2]] * 4 + [SS8[2]] * 3
+    assert truth["theta"].c1 == SS8[1]  # the summary's truth: the last row
+
+
 def declaration_log(path, n, t_declare, declared, weight, theta, theta_valid_before=None):
     """An estimator's EstType and EstTheta at 1 Hz for n s: undecided (255)
     until t_declare, then `declared` (a Table 1 index, or 254 for a custom

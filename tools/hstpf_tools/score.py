@@ -57,11 +57,20 @@ def read_truth(path: str) -> Dict[str, np.ndarray]:
         gone = [k for k in cols if r.get(k) in (None, "")]  # a file cut short ends in a partial row
         if gone:
             raise ValueError(f"line {n} has no {gone[0]}")
-    out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps")}
+    out = {k: np.array([float(r[k]) for r in rows]) for k in ("time_s", "position_m", "speed_mps", "c0", "c1", "c2")}
     r0 = rows[-1]
     out["theta"] = Theta(r0["type"], float(r0["c0"]), float(r0["c1"]), float(r0["c2"]))
     out["identity"] = {k: r0[k] for k in ("type", "seed", "noise", "profile") if r0.get(k)}
     return out
+
+
+def truth_theta_at(truth: Dict[str, np.ndarray], t: np.ndarray) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The truth's c0, c1, c2 in force at each time t (the row at or before
+    it): a consist coupled on the way changes them, and the plots compared
+    every estimate with the last row's (a review)."""
+    tt = truth["time_s"]
+    at = np.clip(np.searchsorted(tt, np.asarray(t, dtype=float), side="right") - 1, 0, len(tt) - 1)
+    return truth["c0"][at], truth["c1"][at], truth["c2"][at]
 
 
 def w_rms_rel(est: Theta, true: Theta) -> float:
@@ -566,7 +575,9 @@ def plots(series, truth, outdir: Path, rule: Optional[dict] = None, decision: Op
     if thf:
         t = np.array([x[0] for x in thf])
         fig, ax = plt.subplots(figsize=(9, 4))
-        for k, c in (("C0", th_true.c0), ("C1", th_true.c1), ("C2", th_true.c2)):
+        true_at = truth_theta_at(truth, t)
+        for i, k in enumerate(("C0", "C1", "C2")):
+            c = true_at[i]
             ax.plot(t, 100 * (np.array([x[1][k] for x in thf]) - c) / c, label=k.lower())
         ax.axhspan(-5, 5, color="green", alpha=0.1, label="+-5 %")
         _mark_decision(ax, decision, declared)
