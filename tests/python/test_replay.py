@@ -166,6 +166,25 @@ def test_send_all_catches_up_on_absolute_deadlines(clean_msgs):
     assert behind["over_0.1"] >= 10 and 0.2 <= behind["max"] < 0.6
 
 
+def test_send_all_cuts_long_pauses(clean_msgs):
+    """A frame stamped 1e6 s after the rest (a garbage line) went out after
+    11.6 days; as python-can's MessageSync (skip=60) a pause longer than
+    `skip` is cut to it: at 1000x the frame after a 1e6 s pause goes out
+    about 60 / 1000 s after the one before, and the pause is reported."""
+    msgs = [m for m in clean_msgs if m.timestamp < 501.0 - 1e-9]
+    late = can.Message(timestamp=msgs[-1].timestamp + 1e6, arbitration_id=0x7F0, data=bytes(2))
+    bus = _StallingBus(-1, 0.0)
+    skipped: list = []
+    t = time.perf_counter()
+    assert replay.send_all(bus, msgs + [late], speed=1000.0, skipped=skipped) == len(msgs) + 1
+    assert time.perf_counter() - t < 5.0
+    assert 0.055 < bus.sent[-1][0] - bus.sent[-2][0] < 0.5
+    assert len(skipped) == 1 and skipped[0][1] == pytest.approx(1e6)
+    bus = _StallingBus(-1, 0.0)  # a pause within skip is kept
+    assert replay.send_all(bus, msgs + [late], speed=1e6, skip=float("inf")) == len(msgs) + 1
+    assert bus.sent[-1][0] - bus.sent[-2][0] > 0.9
+
+
 def test_error_frames_not_sent_unless_asked(clean_msgs, tmp_path, capsys):
     """As python-can's player: a log's error frames stay off the bus unless
     --error-frames (hstpf-record keeps them in its logs)."""

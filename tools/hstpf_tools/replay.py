@@ -177,9 +177,13 @@ class SendError(Exception):
 
 def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, fast: bool = False,
              stop: Optional[cli.Stop] = None, progress: Optional[cli.Progress] = None,
-             behind: Optional[dict] = None) -> int:
+             behind: Optional[dict] = None, skip: float = 60.0, skipped: Optional[list] = None) -> int:
     """Sends each message at its log time scaled by 1/speed from the first
-    (fast: back to back), as python-can's MessageSync with gap 0, but waits
+    (fast: back to back), as python-can's MessageSync with gap 0: a pause
+    of more than `skip` log seconds between two frames is cut to `skip`
+    (MessageSync's and can.player's default 60; one line stamped 1e6 s
+    ahead made the replay sleep 11.6 days), each such pause appended to
+    `skipped` as (log time, its length). It waits
     in slices of at most 50 ms so that a stop (SIGINT/SIGTERM) ends it at
     once. The deadlines are absolute (from the start), so a stall does not
     shift what follows: the frames it held back go out at once, in order,
@@ -194,9 +198,15 @@ def send_all(bus: can.BusABC, msgs: Sequence[can.Message], speed: float = 1.0, f
     w0 = time.perf_counter()
     n = 0
     late: List[float] = []
+    cut, prev = 0.0, t0
     for m in msgs:
+        if m.timestamp - prev > skip:
+            cut += m.timestamp - prev - skip
+            if skipped is not None:
+                skipped.append((round(prev - t0, 6), round(m.timestamp - prev, 6)))
+        prev = max(prev, m.timestamp)
         if not fast:
-            due = w0 + (m.timestamp - t0) / speed
+            due = w0 + (m.timestamp - t0 - cut) / speed
             while not stop:
                 left = due - time.perf_counter()
                 if left <= 0:
@@ -242,6 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="send on the bus (default: yes, unless -o is given without any bus option)")
     p.add_argument("--speed", type=float, default=1.0, help="speed-up factor (1 = real time)")
     p.add_argument("--fast", action="store_true", help="no timing: send back to back")
+    p.add_argument("--skip", type=float, default=60.0, metavar="S",
+                   help="cut pauses in the log longer than S seconds to S (60, as python-can's player; "
+                        "inf keeps every pause)")
     p.add_argument("--error-frames", action="store_true",
                    help="also send the log's error frames (not sent by default, as python-can's player)")
     p.add_argument("-o", "--out", help="also write the faulted stream to this log ('-': candump text on stdout)")
@@ -267,6 +280,8 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
     a = build_parser().parse_args(argv)
     if a.speed <= 0:
         raise cli.CliError(cli.EXIT_USAGE, "--speed must be > 0")
+    if not a.skip > 0:
+        raise cli.CliError(cli.EXIT_USAGE, "--skip must be > 0")
     rates = {k: getattr(a, k) for k in KINDS}
     if any(r < 0 for r in rates.values()) or sum(rates.values()) > 1:
         raise cli.CliError(cli.EXIT_USAGE, "fault probabilities must be >= 0 and sum to at most 1")
@@ -299,9 +314,15 @@ def _main(argv, bus: Optional[can.BusABC]) -> int:
             with cli.Stop() as stop:
                 try:
                     behind: dict = {}
-                    report["sent"] = send_all(bus, msgs, a.speed, a.fast, stop, progress, behind)
+                    skipped: list = []
+                    report["sent"] = send_all(bus, msgs, a.speed, a.fast, stop, progress, behind, a.skip, skipped)
                     if behind:
                         report["behind_s"] = behind
+                    if skipped:
+                        report["pauses_cut"] = [{"at_s": t, "log_s": g} for t, g in skipped]
+                        print(f"hstpf-replay: {len(skipped)} pause(s) in the log longer than {a.skip:g} s cut to it "
+                              f"(the first at log time {skipped[0][0]:g} s, {skipped[0][1]:g} s long; "
+                              f"--skip inf keeps them)", file=sys.stderr)
                 except SendError as exc:
                     report["sent"] = exc.sent
                     failure = f"the bus failed after {exc.sent} frames: {exc.cause}"
