@@ -47,6 +47,22 @@ def test_unit_force_needs_mass(tmp_path):
     assert forces == pytest.approx([20 * 400 * 9.81 / 1000, -10 * 400 * 9.81 / 1000], abs=0.0051)
 
 
+def test_rows_slower_than_the_timeout_warned(tmp_path, capsys):
+    """One frame per row: rows 1 s apart exceed the frames' 0.5 s E2E
+    timeout (the DBC's), so hstpfd takes each frame as stale; the encoder
+    says so (stderr, and the report's rows_beyond_timeout), and not for
+    rows 0.1 s apart."""
+    csv = tmp_path / "slow.csv"
+    csv.write_text("time_s,position_m,force_kn\n" + "".join(f"{k},{10.0 * k},5\n" for k in range(6)))
+    assert encode.main([str(csv), "-o", str(tmp_path / "s.log")]) == 0
+    cap = capsys.readouterr()
+    assert json.loads(cap.out)["rows_beyond_timeout"] == 5 and "E2E timeout (0.5 s" in cap.err
+    csv.write_text("time_s,position_m,force_kn\n" + "".join(f"{k / 10},{k},5\n" for k in range(6)))
+    assert encode.main([str(csv), "-o", str(tmp_path / "s.log")]) == 0
+    cap = capsys.readouterr()
+    assert "rows_beyond_timeout" not in json.loads(cap.out) and cap.err == ""
+
+
 def test_bad_input(tmp_path):
     csv = tmp_path / "b.csv"
     csv.write_text("time_s,position_m,force_kn\n1,0,0\n0.5,0,0\n")

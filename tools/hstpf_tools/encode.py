@@ -6,7 +6,7 @@ import math
 import sys
 
 from . import cli, model
-from .frames import FrameCodec
+from .frames import POSITION, TRACTION, FrameCodec, e2e_params
 from .logio import input_frames
 
 
@@ -86,7 +86,19 @@ def _main(argv) -> int:
         raise cli.input_error(a.dbc or "the DBC", exc) from exc
     msgs = input_frames(codec, a.t0, times, pos, force, a.channel, pv, tv, fix, not a.no_fix_time)
     n = cli.save_log(a.out, msgs, a.channel)
-    cli.emit_report({"log": a.out, "rows": len(rows), "frames": n}, a.json, stdout_taken=a.out == "-")
+    report = {"log": a.out, "rows": len(rows), "frames": n}
+    # one frame per row: rows further apart than the receiver's E2E timeout (the DBC's, hstpfd's
+    # default) arrive stale, and the estimator then never has a traction (a review: 1 Hz rows, 0.5 s)
+    timeout = min(e2e_params(codec.message(name), codec.db)[1] for name in (POSITION, TRACTION))
+    gaps = [b - t for t, b in zip(times, times[1:])]
+    slow = sum(g > timeout for g in gaps)
+    if slow:
+        report["rows_beyond_timeout"] = slow
+        print(f"hstpf-encode: {slow} of {len(gaps)} row intervals exceed the frames' E2E timeout "
+              f"({timeout:g} s, the DBC's HstpfE2ETimeoutMs): hstpfd with its default timeouts takes those "
+              f"frames as stale (resample the CSV, or raise position_timeout_s / traction_timeout_s)",
+              file=sys.stderr)
+    cli.emit_report(report, a.json, stdout_taken=a.out == "-")
     return cli.EXIT_OK
 
 
