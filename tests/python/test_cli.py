@@ -119,6 +119,12 @@ def test_bad_input_contents_is_exit_3(files, tmp_path, capsys):
     truth.write_text("a,b\n1,2\n")
     assert score.main([str(files / "est.log"), "--truth", str(truth)]) == cli.EXIT_INPUT
     one_line(capsys.readouterr().err, "hstpf-score", str(truth), "not a truth CSV")
+    empty = tmp_path / "empty.log"  # no frame at all: replay sent nothing and exited 0 (a review)
+    empty.write_text("")
+    assert replay.main([str(empty), "--no-bus", "-o", str(tmp_path / "o.log")]) == cli.EXIT_INPUT
+    one_line(capsys.readouterr().err, "hstpf-replay", str(empty), "no frame")
+    assert score.main([str(empty), "--truth", str(files / "run_truth.csv")]) == cli.EXIT_INPUT
+    one_line(capsys.readouterr().err, "hstpf-score", str(empty), "no frame")
 
 
 @pytest.mark.parametrize("name", ["hstpf-replay", "hstpf-record"])

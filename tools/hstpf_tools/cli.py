@@ -402,13 +402,17 @@ class Progress:
 
 
 def load_log(path: str):
-    """read_log(path) with its failure as CliError(3)."""
+    """read_log(path) with its failure as CliError(3), and a log with no
+    frame at all (an empty file: replay sent nothing and exited 0)."""
     from .logio import read_log
 
     try:
-        return read_log(path)
+        msgs = read_log(path)
     except Exception as exc:  # python-can's readers raise many kinds on bad text
         raise input_error(path, exc) from exc
+    if not msgs:
+        raise input_error(path, ValueError("no frame in it"))
+    return msgs
 
 
 # What writing a log through python-can raises for a bad output path: OSError;
