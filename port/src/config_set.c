@@ -210,6 +210,13 @@ int hstpfd_parse_models(hstpfd_config_t *c, const char *text, char *err, size_t 
                              hstpfd__trim(f[0]), HSTPF_C0_MAX, HSTPF_C1_MAX, HSTPF_C2_MAX);
                 return -1;
             }
+            if (hstpf_train_type_find(hstpfd__trim(f[0])) >= 0) {
+                /* a custom row under a Table 1 name: the summary said "declared CRH3" of a row at
+                 * (0, 0, 0) while the bus carried 254, custom (a review) */
+                hstpfd__fail(err, err_size, "models: custom entry '%s' takes a Table 1 name: give the row by its "
+                             "name alone, or the custom one another name", whole);
+                return -1;
+            }
             if (add_model(&t, hstpfd__trim(f[0]), c0, c1, c2, err, err_size) != 0) {
                 return -1;
             }

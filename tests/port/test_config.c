@@ -304,6 +304,10 @@ static void test_finish(void **state)
     /* a custom model's message shows the entry as given */
     assert_int_equal(hstpfd_config_set(&cfg, "models", "a:b:1:0:0", err, sizeof err), -1);
     assert_non_null(strstr(err, "'a:b:1:0:0'"));
+    /* a custom row under a Table 1 name is refused (the summary named it CRH3, the bus 254) */
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "CRH3:0:0:0", err, sizeof err), -1);
+    assert_non_null(strstr(err, "Table 1 name"));
+    assert_int_equal(hstpfd_config_set(&cfg, "models", "CRH3,Mine:0.8:0.006:0.0001", err, sizeof err), 0);
     assert_int_equal(hstpfd_config_set(&cfg, "iface", "averyveryveryveryverylonginterfacename", err, sizeof err),
                      -1);
 }
