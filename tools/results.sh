@@ -55,7 +55,7 @@ done
 fi
 if section journeys; then
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
-for s in stops day start300 clock+30 clock-30 outage gain5 restart tracgap swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
+for s in stops day start300 clock+30 clock-30 outage gain5 restart tracgap silent swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
   echo "== $s"
   oracle=()
   case $s in stops) oracle=(--oracle) ;; esac

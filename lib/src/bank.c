@@ -555,7 +555,22 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
      * random walk like the noises (variance in proportion to T): sd
      * accel_unknown_sd dt_nominal over a nominal step; the configured
      * noises keep their shape and mean */
-    st.acc_var = free_run ? f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * in->dt_s * f->cfg.dt_nominal_s : 0.0;
+    if (free_run) {
+        /* across steps without a fix the unknown acceleration persists (a
+         * brake or a traction is held for tens of seconds, not redrawn each
+         * step): over a span t without one its variance on the speed is
+         * accel_unknown_sd^2 t max(t, dt_nominal), the random walk's up to a
+         * nominal step and (sd t)^2 beyond. The random walk alone made a
+         * minute without any input at 300 km/h, the train braking in it,
+         * 13-23 m/s off at 3-6 sd (hstpf-mc --scenario silent) */
+        const double a2 = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd, dn = f->cfg.dt_nominal_s;
+        const double u = f->free_s, w = u + in->dt_s;
+        st.acc_var = a2 * (w * (w > dn ? w : dn) - u * (u > dn ? u : dn));
+        f->free_s = has_y ? 0.0 : w;
+    } else {
+        st.acc_var = 0.0;
+        f->free_s = 0.0;
+    }
     engines_step(f, e, &st);
     {
         const int hold = weights_hold(f, in->dt_s);

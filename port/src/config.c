@@ -150,6 +150,10 @@ void hstpfd_config_filter(const hstpfd_config_t *c, hstpf_config_t *fc)
     /* the daemon's gap rule (sched.c: a gap between positions beyond
      * max_gap_s re-acquires) governs; the library's per-step one, left at
      * its 30 s, dropped the lock at every step when step_period_s or
-     * predict_period_s was above it (up to HSTPF_DT_MAX_S), silently */
-    fc->max_gap_s = c->sched.max_gap_s < HSTPF_DT_MAX_S ? c->sched.max_gap_s : HSTPF_DT_MAX_S;
+     * predict_period_s was above it (up to HSTPF_DT_MAX_S), silently; a
+     * value out of range is sched.c's to refuse */
+    fc->max_gap_s = HSTPF_DT_MAX_S;
+    if (c->sched.max_gap_s > 0.0 && c->sched.max_gap_s < HSTPF_DT_MAX_S) {
+        fc->max_gap_s = c->sched.max_gap_s;
+    }
 }

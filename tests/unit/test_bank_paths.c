@@ -994,11 +994,14 @@ static void run_traction_gap(hstpf_engine_t engine, double dt, int case2)
  * - W_CRH3) = 0.69 m/s^2 at 350 km/h: 21 m/s and 259 m (5 sd) after 30 s,
  * valid (a review's harness). Expected by hand: each model's mean speed
  * stays within 0.1 m/s (the hair, 1e-3 m/s^2, adds 0.03 m/s over 30 s; the
- * resistance's slope at the mean restores the rest), or within 1 m/s on
- * the particle engine (100 particles, each with the unknown
- * acceleration's random walk of 0.5 m/s^2 and the speed noise's 0.22 m/s
- * a step: the cloud's mean moves by about sqrt(0.25 + 0.05) sqrt(30 /
- * 100) = 0.30 m/s, so 1 m/s is 3.3 of its sd); the published position
+ * resistance's slope at the mean restores the rest); within 0.3 m/s on the
+ * grid, whose cells hold the whole speed spread (sd 0.5 t after t s
+ * without a fix), over which W's curvature slows the mean by xi c2 sd^2:
+ * DFH3's c2 (8.7e-3 N/kN per (m/s)^2) gives 0.19 m/s over 30 s; within 5 m/s on
+ * the particle engine (100 particles, each drawing the unknown
+ * acceleration, which persists across steps without a fix: sd 0.5 m/s^2
+ * x 30 s = 15 m/s after 30 s, so the cloud's mean moves by about 15 /
+ * sqrt(100) = 1.5 m/s, and 5 m/s is 3.3 of that); the published position
  * within 3 of its sd of the truth (+1 m). */
 static void test_free_run_balance(void **state)
 {
@@ -1007,7 +1010,7 @@ static void test_free_run_balance(void **state)
     for (i = 0; i < 3; ++i) {
         hstpf_config_t c;
         hstpf_estimate_t e0, e;
-        const double v = 350.0 / 3.6, tol = engines[i] == HSTPF_ENGINE_PARTICLE ? 1.0 : 0.1;
+        const double v = 350.0 / 3.6, tol = engines[i] == HSTPF_ENGINE_PARTICLE ? 5.0 : (engines[i] == HSTPF_ENGINE_GRID ? 0.3 : 0.1);
         base_config(&c, engines[i], 2);
         rows[1] = hstpf_train_types[hstpf_train_type_find("DFH3")];
         start(&c);

@@ -746,6 +746,7 @@ typedef struct {
     uint8_t weights_wait;            /* held or arriving: this step's weights did not move */
     double arrival_s;                /* time the weighted models disagreed on being at rest */
     double stop_s;                   /* time this standstill has lasted */
+    double free_s;                   /* time without a fix used while the traction is unknown */
     uint8_t mix_pending;             /* a standstill of HSTPF_CONSIST_STOP_S ended: mix at the next weighted step */
     uint8_t ever_locked;
     double pend_y;                   /* that fix, absolute m */
