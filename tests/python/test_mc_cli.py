@@ -119,6 +119,8 @@ def test_models_custom_bank(mc, tmp_path):
     (["--scenario", "paper1", "--json", "/nonexistent/x.json"], "--json /nonexistent/x.json"),
     (["--scenario", "paper1", "--trace", "/nonexistent/t.csv"], "--trace /nonexistent/t.csv"),
     (["--scenario", "paper1", "--first-seed", "5", "--trace-seed", "2", "--trace", "t.csv"], "not among the seeds"),
+    # a value only the library's check refuses (hstpf.h's range): exit 2 naming the field, not 1
+    (["--scenario", "paper1", "--seeds", "1", "--threshold", "1.5"], "refuses the settings"),
 ])
 def test_bad_command_lines_say_why(mc, args, says, tmp_path):
     """A bad command line exits 2 with its reason on stderr, not the bare

@@ -536,8 +536,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         if (rc != HSTPF_OK) {
             const char *field = "";
             (void)hstpf_config_check(&cfg, &field);
-            fprintf(stderr, "hstpf-mc: hstpf_init failed (%d)%s%s\n", (int)rc, *field ? ": " : "", field);
-            exit(1);
+            /* the scenarios' settings pass: an option's value did not (e.g. --threshold 1.5) */
+            fprintf(stderr, "hstpf-mc: the library refuses the settings (%s, %d)%s%s\n", hstpf_strerror(rc), (int)rc,
+                    *field ? ": " : "", field);
+            exit(2);
         }
     }
     r->or_sep = r->or_lead = r->or_sep_lead = r->or_nb_first = -1.0;
