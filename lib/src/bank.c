@@ -640,7 +640,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             hstpf__probation(f, s_m, in->position_m);
         }
     }
-    if (f->cfg.reacquire_after > 0u && f->lost_run >= f->cfg.reacquire_after) {
+    if (f->cfg.reacquire_after > 0u && (f->lost_run >= f->cfg.reacquire_after ||
+                                         (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN && !f->weights_wait &&
+                                          f->lost_run >= HSTPF__LOST_REACQUIRE))) {
         ++f->reacquired;
         f->lost_run = 0;
         hstpf__drop_lock(f, 0);
