@@ -138,6 +138,20 @@ static void take_step(hstpf_t *f, double step, double v)
     f->fs.run_n = 0;
 }
 
+/* After a step, this fix on the new reference (offset d) begins the run's
+ * ring again: a run back then has a fix that fitted before it, so a two-fix
+ * excursion is undone two fixes after its return (without it, a 100 m
+ * multipath excursion at speed under Student-t fixes stood as a step,
+ * published 99 m off for 9-13 steps: a review). */
+static void ring_restart(hstpf_t *f, double d, double pred, double vel, double dt)
+{
+    f->fs.run[0] = (real)d;
+    f->fs.run_p[0] = (real)pred;
+    f->fs.run_v[0] = (real)vel;
+    f->fs.run_dt[0] = (real)dt;
+    f->fs.run_n = 1;
+}
+
 /* Whether the last k fixes used (k >= 2, the one before them too) are a
  * step; its size into *step. In float where it can be: the M4F's double
  * is soft-float. */
@@ -238,7 +252,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, 
     const real shrink = sd / (real)sqrt((double)(sd * sd) + var);
     const real iq = (hstpf__dist_sample(q, 0xC0000000u) - hstpf__dist_sample(q, 0x40000000u)) / (real)1.349;
     const real spread = (real)sqrt((double)(iq * iq) + var);
-    const real reach = (real)(STEP_RANGES * hstpf__dist_range(q, RANGE_TAIL));
+    const real reach = (real)f->cfg.gate_m; /* a run's evidence holds a jump of any size the gate lets in */
     const real tails = hold_hi < hold_lo ? hold_hi : hold_lo;
     const int light = !(tails > (real)RUN_HEAVY_Z * sd);
     int k;
@@ -262,6 +276,7 @@ static void run_rule(hstpf_t *f, double d, double var, double pred, double vel, 
         if (run_is_step(f, k, light, shrink, spread, &step) && fabs((double)step) <= (double)reach) {
             take_step(f, (double)step, (double)(sd * sd) / (double)k);
             f->fs.side = (int8_t)beyond(f, d - (double)step, var, FIT_TAIL, FIT_Z);
+            ring_restart(f, d - (double)step, pred, vel, dt);
             return;
         }
     }
@@ -274,12 +289,15 @@ static int fix_step(hstpf_t *f, double d, double var, double dt, double pred, do
     int out;
     f->fs.pend = 0;
     f->fs.side = 2; /* unknown: no hold at the next fix */
-    /* not while the lock is new, doubted or lost, nor across a long step
-     * (its prediction leaves out T^2 a / 2), nor while the traction is in
-     * doubt (its innovations jump too: tracsign took 752 such jumps for
-     * steps, and published 6 % more wrong speeds) */
-    if (f->pr.active || f->pr.timed || f->lost_run != 0u || hstpf__substeps(f, dt) > 1u || f->tc.doubt ||
-        f->tc.fault || f->tc.release ||
+    /* not while the lock is new, doubted or lost, nor while the traction
+     * is in doubt (its innovations jump too: tracsign took 752 such jumps
+     * for steps, and published 6 % more wrong speeds). Across a long step
+     * too: the acceleration its prediction leaves out, STEP_ACC T^2 / 2,
+     * widens the reach (hstpf__fix_gate); left out before, a receive clock
+     * that stepped 1-3 s at speed (which hstpfd predicts across) put every
+     * later fix 60-196 m behind, and under Student-t fixes the grid
+     * published that, valid, for 6-15 steps (a review) */
+    if (f->pr.active || f->pr.timed || f->lost_run != 0u || f->tc.doubt || f->tc.fault || f->tc.release ||
         (f->outlier_run != 0u && !pend)) {
         f->fs.run_n = 0;
         return 0;
@@ -290,6 +308,7 @@ static int fix_step(hstpf_t *f, double d, double var, double dt, double pred, do
          * the noise's mean, which the filters expect in every fix) */
         const double step = 0.5 * (d + f->fs.d) - f->noise_mom[4];
         take_step(f, step, 0.5 * f->noise_mom[5] * f->noise_mom[5]);
+        ring_restart(f, d - step, pred, vel, dt);
         /* this fix on the new reference: its return next is held (a
          * two-fix excursion was taken for a step, and the return for speed) */
         f->fs.side = (int8_t)beyond(f, d - step, var, FIT_TAIL, FIT_Z);

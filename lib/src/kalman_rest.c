@@ -60,7 +60,11 @@ static int kalman_rest_timed(double vd, double pyy, double mu_w, double q_w, dou
         return rest;
     }
     c->t += out->p_rest >= 0.5 ? dt : HSTPF__REST_SD_RATE * dt;
-    if (c->t >= HSTPF__REST_SETTLE_S && c->llr >= (hstpf_real_t)0) {
+    /* and only on fixes: in an outage (none scored, c->p still 0) the
+     * timer settled a model braking into a stop under the reported brake,
+     * and the speed was published 0 +- 0.004 m/s while the train ran on at
+     * 6.7 m/s, its position sd 282 m (a review's harness) */
+    if (c->t >= HSTPF__REST_SETTLE_S && c->p > (hstpf_real_t)0 && c->llr >= (hstpf_real_t)0) {
         memset(c, 0, sizeof *c);
         return HSTPF__REST_AT_REST;
     }

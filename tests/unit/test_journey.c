@@ -1271,6 +1271,41 @@ static void fix_step_heavy_run(int stepped, uint64_t seed)
     assert_int_equal(e.fix_steps, stepped == 1 ? 1u : 0u);
 }
 
+/* The same fixes at 240 km/h: one step dated 2 s late (a receive clock
+ * that stepped, which hstpfd predicts across), so every later fix lies
+ * 133 m behind the prediction (mode 0); or two multipath fixes 100 m ahead
+ * (mode 1). A step over two nominal steps was left out of the step rule,
+ * and a jump beyond four of the noise's 2^-10 ranges (184 m here) too:
+ * the grid published positions 60-196 m off at 20-41 sd, valid, for 6-15
+ * steps; and a run rule's step dropped its ring, so the return of a two-fix
+ * excursion never formed a run back: 99 m off for 9-13 steps (a review).
+ * Expected by hand: each fix 133 m (100 m) off scores 2 ln(1 + (133 /
+ * 1.97)^2 / 3) = 14.4 nats (13.4) against "did not move", so two of them
+ * pass 20 nats: one step within two fixes of the jump (mode 1: and one back
+ * within two of the return); from the fourth fix after it on, every valid
+ * step within 4 of its sd of the truth (the fixes' reference is right). */
+static void fix_step_heavy_moving(int mode, uint64_t seed)
+{
+    truth_t t;
+    hstpf_estimate_t e;
+    int k;
+    heavy_start(&t, seed);
+    t.v = 240.0 / 3.6;
+    for (k = 0; k < 200; ++k) {
+        const double u = hstpf_resistance(&t.th, t.v);
+        const double off = mode == 1 && (k == 120 || k == 121) ? 100.0 : 0.0;
+        const hstpf_input_t in = tu_input(mode == 0 && k == 120 ? 3.0 : 1.0, u, t3_fix(&t) + off, 1);
+        (void)hstpf_step(&filt, &in);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (k >= 125 && e.valid) {
+            assert_true(fabs(e.position_m - t.s) <= 4.0 * e.position_sd_m);
+        }
+        truth_step(&t, u);
+    }
+    assert_int_equal(e.fix_steps, mode == 0 ? 1u : 2u);
+}
+
 /* The same fixes, the train leaving at 100 s while the brake is still
  * reported (as test_held_but_moving): the offsets grow along a ramp, each
  * fix beyond the last, and the fix before a run fits far out under a
@@ -1301,6 +1336,8 @@ static void test_fix_step_heavy(void **state)
         fix_step_heavy_departure(seed);
     }
     for (seed = 1; seed <= 4; ++seed) {
+        fix_step_heavy_moving(0, seed);
+        fix_step_heavy_moving(1, seed);
         fix_step_heavy_run(1, seed);
         fix_step_heavy_run(0, seed);
         fix_step_heavy_run(2, seed);
