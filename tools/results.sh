@@ -55,7 +55,7 @@ done
 fi
 if section journeys; then
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
-for s in stops day start300 clock+30 clock-30 outage gain5 restart tracgap silent swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
+for s in stops day start300 clock+30 clock-30 clock+1 clock+3-t outage gain5 restart tracgap silent swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
   echo "== $s"
   oracle=()
   case $s in stops) oracle=(--oracle) ;; esac
@@ -77,7 +77,7 @@ for s in tracsign gain-20; do
   "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"
 done
 # steps in the fixes' reference (a GNSS bias, lone outliers), with cfg.fix_step and without it
-for s in fixbias20 fixbias14 fixbias10 spikes20 stopstep12 stopstep-12 stopstep12-t stopstep12-mix fixbias20-t late60-t; do
+for s in fixbias20 fixbias14 fixbias10 spikes20 burst100 burst100-t stopstep12 stopstep-12 stopstep12-t stopstep12-mix fixbias20-t late60-t; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-fix-step | tee "$out/$s-nostep.txt"

@@ -1070,6 +1070,10 @@ static const scenario_t scenarios[] = {
     {.name = "start300", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt},
     {.name = "clock+30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 30.0, .clock_at_s = CLOCK_AT_S},
     {.name = "clock-30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = -30.0, .clock_at_s = CLOCK_AT_S},
+    /* a receive clock that steps 1 s or 3 s forward at 300 km/h (hstpfd predicts across it: the step
+     * is dated late, the fixes run on), under Case 1's and under Student-t fixes */
+    {.name = "clock+1", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 1.0, .clock_at_s = CLOCK_AT_S},
+    {.name = "clock+3-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 3.0, .clock_at_s = CLOCK_AT_S},
     {.name = "outage", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .outage = 1},
     {.name = "gain5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = 0.05},
     /* trains not on Table 1: the line, each coefficient 10 / 15 / 20 % off its row; an
@@ -1122,6 +1126,10 @@ static const scenario_t scenarios[] = {
     {.name = "stopstep12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
     {.name = "stopstep-12", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = -12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0},
     {.name = "spikes20", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = 150.0, .fix_off_s = 0.5, .fix_off_every_s = 150.0},
+    /* two fixes in a row 100 m off every 150 s, the sign alternating (a multipath burst), under
+     * Case 1's and under Student-t fixes */
+    {.name = "burst100", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 100.0, .fix_off_at_s = 150.0, .fix_off_s = 1.5, .fix_off_every_s = 150.0},
+    {.name = "burst100-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 100.0, .fix_off_at_s = 150.0, .fix_off_s = 1.5, .fix_off_every_s = 150.0},
     {.name = "tracsign", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .sign_flip_at_s = 1010.0},
     /* the same on the line with heavy-t's Student-t position noise (the grid
      * engine, the continuous hypothesis through its yardstick) */
