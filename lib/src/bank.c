@@ -641,12 +641,16 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         }
     }
     if (f->cfg.reacquire_after > 0u && (f->lost_run >= f->cfg.reacquire_after ||
-                                         (f->engine == (uint8_t)HSTPF_ENGINE_KALMAN && !f->weights_wait &&
+                                         (f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && !f->weights_wait &&
                                           f->lost_run >= HSTPF__LOST_REACQUIRE))) {
+        /* this fix pairs with the next; after the Kalman engine's two it
+         * may be an outlier (a multipath burst: paired with the next good
+         * fix it gave a speed 17 m/s low), so the next two pair */
+        const int early = f->lost_run < f->cfg.reacquire_after;
         ++f->reacquired;
         f->lost_run = 0;
         hstpf__drop_lock(f, 0);
-        f->have_pend = 1; /* this fix pairs with the next */
+        f->have_pend = (uint8_t)!early;
         f->pend_y = in->position_m;
         f->pend_age_s = 0.0;
     }

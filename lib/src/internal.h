@@ -10,18 +10,21 @@
  * which the weights wait, s: braking from the speeds where the models
  * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
 #define HSTPF__ARRIVAL_MAX_S 10.0
-/* The Kalman engine's fixes beyond the floor of every weighted model in a
- * row after which the lock is dropped (cfg.reacquire_after if smaller):
- * its filters take each such fix in clipped (Huber) with the whole gain,
- * and a few of them dragged the speed 9 m/s off before one fitted again
- * and the estimate was valid at 20 sd (a clock step of 1 s at 240 km/h, a
- * review's harness); under the model two in a row are beyond 6 sd twice,
- * so what they say is a lock lost. Not at a standstill or an arrival: a
+/* Fixes beyond the floor of every weighted hypothesis in a row after which
+ * the Kalman and grid engines drop the lock, moving (cfg.reacquire_after
+ * if smaller): the Kalman filters take each such fix in clipped (Huber)
+ * with the whole gain, and a few of them dragged the speed 9 m/s off
+ * before one fitted again, valid at 20 sd (a clock step of 1 s at 240
+ * km/h, a review's harness); and from the second such fix on the weights
+ * move and the traction check runs, which blamed a true traction for
+ * minutes after a clock step of 3 s under Student-t fixes (hstpf-mc
+ * clock+3-t). Under the model two in a row are beyond the floor twice, so
+ * what they say is a lock lost. Not at a standstill or an arrival: a
  * train leaving under a reported brake runs away from the held models,
  * whose clipped fixes let the release follow it (late60: 3 084 more
- * traction-fault steps at 10 seeds per truth with the lock dropped). The
- * grid's and the particles' floors move no state (a cell or a particle
- * beyond it just scores the floor) */
+ * traction-fault steps at 10 seeds per truth with the lock dropped). Not
+ * the particle engine, whose swapped-traction runs it re-acquired over and
+ * over (test_traction_wrong) */
 #define HSTPF__LOST_REACQUIRE 2u
 /* A step longer than this many dt_nominal_s is predicted in parts (bank.c) */
 #define HSTPF__SUBSTEP_RATIO 1.5
