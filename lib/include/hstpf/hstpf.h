@@ -300,9 +300,9 @@ typedef struct {
      *  re-acquired (one back on probation, HSTPF_REF_PROBATION_S, or at
      *  once after hstpf_reacquire(); position_m). The first measurement of such a run moves no model
      *  weight (an outlier of a heavy-tailed noise; docs/model.md). On the
-     *  Kalman engine, moving, two measurements beyond every weighted
-     *  model's floor in a row are enough (its filters take them in
-     *  clipped). 0 = never (5). */
+     *  Kalman and grid engines, moving, two measurements beyond every
+     *  weighted hypothesis' floor in a row are enough, and the two after
+     *  them are the new pair. 0 = never (5). */
     uint16_t reacquire_after;
     /** A model whose every particle was at the likelihood floor for this
      *  many measurements (it lost the train) is redrawn at the fix with the
