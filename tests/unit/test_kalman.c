@@ -25,6 +25,7 @@
  * linearised). */
 #include <string.h>
 
+#include "engine.h"
 #include "hstpf_sim.h"
 #include "testbuild.h"
 #include "testutil.h"
@@ -227,6 +228,45 @@ static void test_step(void **state)
  * against the reference's quadrature. The next such step leaves 2e-3
  * moving, and P(at rest) has been over 1/2 for 2 s: at rest, 0 +- 0
  * exactly, and held. */
+/* The settle timer puts a model at rest only on fixes (kalman_rest.c). A
+ * prediction y = v + T a ~ N(-0.5, 1): P(y < 0) = Phi(0.5) = 0.69, at
+ * least 1/2 but under 1 - HSTPF__REST_EPS, so only the timer can put it at
+ * rest, after HSTPF__REST_SETTLE_S (2 s) of such steps. Expected by hand:
+ * with no fix (an outage) it never does, 6 steps of 1 s; with one fix
+ * where it stood (the timer's "stood still" and the filter's prediction
+ * then score it alike: evidence 0, not below) it does at the second
+ * step. Before, the outage's evidence stayed 0 and the timer settled a
+ * model braking into a stop while the train ran on at 6.7 m/s (a
+ * review's harness). */
+static void test_settle_needs_a_fix(void **state)
+{
+    static hstpf_t f;
+    static const char *const names[1] = {"CRH3"};
+    hstpf_theta_t rows[1];
+    hstpf_config_t c;
+    hstpf_settle_t timer;
+    int k, with_fix;
+    (void)state;
+    tu_config_rows(&c, rows, names, 1);
+    c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&f, sizeof f, &c), HSTPF_OK);
+    for (with_fix = 0; with_fix < 2; ++with_fix) {
+        memset(&timer, 0, sizeof timer);
+        for (k = 1; k <= 6; ++k) {
+            double x[2] = {100.0, 0.0}, p[4] = {0.5, 0.0, 0.0, 1.0};
+            const uint8_t held = hstpf__kalman_rest_speed(x, p, 2, -0.5, 0, 0.0, 0.05, 0.0, 1.0, &timer);
+            if (with_fix && k == 1) {
+                hstpf__settle_fix(&f, &timer, 100.0, 0.5, 100.0);
+            }
+            assert_int_equal(held, with_fix && k >= 2 ? HSTPF__HELD_YES : HSTPF__HELD_STOPPING);
+            if (held == HSTPF__HELD_YES) {
+                break;
+            }
+        }
+    }
+}
+
 static void test_no_reversal(void **state)
 {
     hstpf_config_t c;
@@ -437,6 +477,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_step),          cmocka_unit_test(test_no_reversal),
+        cmocka_unit_test(test_settle_needs_a_fix),
         cmocka_unit_test(test_outlier),       cmocka_unit_test(test_engine_choice),
         cmocka_unit_test(test_consistency),
     };
