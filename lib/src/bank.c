@@ -643,9 +643,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     if (f->cfg.reacquire_after > 0u && (f->lost_run >= f->cfg.reacquire_after ||
                                          (f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && !f->weights_wait &&
                                           f->lost_run >= HSTPF__LOST_REACQUIRE))) {
-        /* this fix pairs with the next; after the Kalman engine's two it
-         * may be an outlier (a multipath burst: paired with the next good
-         * fix it gave a speed 17 m/s low), so the next two pair */
+        /* this fix pairs with the next; after the early two
+         * (HSTPF__LOST_REACQUIRE) it may be an outlier (a multipath burst:
+         * paired with the next good fix it gave a speed 17 m/s low), so the
+         * next two pair */
         const int early = f->lost_run < f->cfg.reacquire_after;
         ++f->reacquired;
         f->lost_run = 0;
