@@ -387,12 +387,20 @@ static void advance_time(hstpf_t *f, double dt)
     ++f->steps;
 }
 
+/* What balances model m's resistance at speed v and the track's force at
+ * its mean position, m/s^2 (a held bank's grade too: a hair is added by
+ * the callers, HSTPF__FREE_HAIR). */
+static double balance(const hstpf_t *f, const hstpf_model_t *m, double v, uint16_t *hint)
+{
+    const double g = f->have_fix && f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, hint, m->s_mean) : 0.0;
+    return (double)m->k0 + ((double)m->k1 + (double)m->k2 * v) * v + g;
+}
+
 /* xi u (m/s^2) for an acquisition whose traction is unknown: what
  * balances the largest resistance among the models at speed v (each
- * model's own when v < 0), plus a hair so that no model holds the train at
- * rest (engine.h's rule needs a net force <= 0 at v = 0). Over the pair's
- * second or so the models' spread in W is small against the pair's speed
- * variance; a step's own is hstpf__step_xu's. */
+ * model's own when v < 0), plus the hair. Over the pair's second or so the
+ * models' spread in W is small against the pair's speed variance; a
+ * step's own is hstpf__step_xu's. */
 static double free_xu(const hstpf_t *f, double v)
 {
     double xu = -HUGE_VAL;
@@ -400,23 +408,19 @@ static double free_xu(const hstpf_t *f, double v)
     for (l = 0; l < f->cfg.n_models + (uint16_t)hstpf__refine_on_grid(f); ++l) {
         const hstpf_model_t *m = &f->m[l];
         const double vl = v >= 0.0 ? v : ((double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0);
-        const double g = f->have_fix ? (double)hstpf__track_acc(f, &hint, m->s_mean) : 0.0;
-        const double w = (double)m->k0 + ((double)m->k1 + (double)m->k2 * vl) * vl + g;
+        const double w = balance(f, m, vl, &hint);
         xu = w > xu ? w : xu;
     }
-    return xu + 1e-3;
+    return xu + HSTPF__FREE_HAIR;
 }
 
 double hstpf__step_xu(const hstpf_t *f, const hstpf_model_t *m, const hstpf__step_t *st)
 {
     uint16_t hint = 0;
-    double v, g;
     if (!st->free_run) {
         return st->xu;
     }
-    v = (double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0;
-    g = f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, &hint, m->s_mean) : 0.0;
-    return (double)m->k0 + ((double)m->k1 + (double)m->k2 * v) * v + g + 1e-3;
+    return balance(f, m, (double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0, &hint) + HSTPF__FREE_HAIR;
 }
 
 /* One step of every model and of the continuous hypothesis. */

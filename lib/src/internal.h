@@ -10,6 +10,10 @@
  * which the weights wait, s: braking from the speeds where the models
  * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
 #define HSTPF__ARRIVAL_MAX_S 10.0
+/* m/s^2 added to a traction made up to balance a resistance (the traction
+ * unknown, the traction check's shadow): no model then holds the train at
+ * rest, which engine.h's rule does at a net force <= 0 at v = 0 */
+#define HSTPF__FREE_HAIR 1e-3
 /* Fixes beyond the floor of every weighted hypothesis in a row after which
  * the Kalman and grid engines drop the lock, moving (cfg.reacquire_after
  * if smaller): the Kalman filters take each such fix in clipped (Huber)

@@ -38,7 +38,7 @@ static int checking(const hstpf_t *f)
  * (its W is 0), and a hair so that nothing holds it at rest. */
 static double shadow_xu(const hstpf_t *f, uint16_t *hint, double s)
 {
-    return (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, hint, (real)s) : 0.0) + 1e-3;
+    return (f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, hint, (real)s) : 0.0) + HSTPF__FREE_HAIR;
 }
 
 /* The shadow placed at the leading row's posterior (every engine publishes

@@ -1135,14 +1135,10 @@ static void fix_step_run(hstpf_engine_t engine, int mode, uint64_t seed)
  * reference. */
 static void fix_step_behind_run(uint64_t seed)
 {
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
     int k;
-    config(&c, HSTPF_ENGINE_KALMAN);
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 0.0, 0.0, seed);
+    kalman_start(&t, 0.0, seed);
     for (k = 0; k < 400; ++k) {
         const double off = k >= 120 ? -10.0 : 0.0;
         const hstpf_input_t in = tu_input(1.0, -50.0, truth_fix(&t) + off, 1);
