@@ -417,10 +417,14 @@ static double free_xu(const hstpf_t *f, double v)
 double hstpf__step_xu(const hstpf_t *f, const hstpf_model_t *m, const hstpf__step_t *st)
 {
     uint16_t hint = 0;
+    double v;
     if (!st->free_run) {
         return st->xu;
     }
-    return balance(f, m, (double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0, &hint) + HSTPF__FREE_HAIR;
+    /* within the speed range (NaN to 0): a model gone far out gave an
+     * infinite balance, and its grid a non-finite box (the fuzz harness) */
+    v = (double)m->v_mean > 0.0 ? ((double)m->v_mean < HSTPF_SPEED_MAX ? (double)m->v_mean : HSTPF_SPEED_MAX) : 0.0;
+    return balance(f, m, v, &hint) + HSTPF__FREE_HAIR;
 }
 
 /* One step of every model and of the continuous hypothesis. */
@@ -568,7 +572,11 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
          * minute without any input at 300 km/h, the train braking in it,
          * 13-23 m/s off at 3-6 sd (hstpf-mc --scenario silent) */
         const double a2 = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd, dn = f->cfg.dt_nominal_s;
-        const double u = f->free_s, w = u + in->dt_s;
+        /* no longer than it takes the acceleration to span the speed
+         * range: beyond, the spread grew without bound and the grid's box
+         * went non-finite (the fuzz harness, a NaN cast in grid_box.c) */
+        const double t_max = HSTPF_SPEED_MAX / f->cfg.accel_unknown_sd;
+        const double u = f->free_s < t_max ? f->free_s : t_max, w = u + in->dt_s < t_max ? u + in->dt_s : t_max;
         st.acc_var = a2 * (w * (w > dn ? w : dn) - u * (u > dn ? u : dn));
         f->free_s = has_y ? 0.0 : w;
     } else {

@@ -196,8 +196,10 @@ static void predicted_box(hstpf_t *f, uint16_t l, real dt, real scale, real tot,
         for (j = 0; j < NS; ++j) {
             rm += rest[j];
         }
-        b = (int32_t)((rest_v - x0) / h);
-        b = b < 0 ? 0 : (b > n - 1 ? n - 1 : b);
+        {
+            const real bb = (rest_v - x0) / h; /* NaN-safe: a box gone non-finite takes bin 0 */
+            b = bb > (real)0 ? (bb < (real)(n - 1) ? (int32_t)bb : n - 1) : 0;
+        }
         hist[b] += rm;
     }
     /* the pull moves the speed the same way (through the s-v correlation) */
