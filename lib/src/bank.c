@@ -106,6 +106,7 @@ static void reset_state(hstpf_t *f)
     f->have_fix = 0;
     f->have_pend = 0;
     f->ever_locked = 0;
+    f->prior_lock = 0;
     f->acquisitions = 0;
     f->nonfinite_resets = 0;
     f->backward = 0;
@@ -483,6 +484,22 @@ static void engines_step(hstpf_t *f, const hstpf__engine_t *e, const hstpf__step
     engines_substep(f, e, &sub);
 }
 
+/* The first fix after a lock from the configured speed prior is gated,
+ * or beyond every weighted model's floor: the prior was wrong (a unit
+ * configured for a power-up at rest that started while the train runs
+ * published 0 +- 1 m/s valid at 300 km/h, then re-acquired after two
+ * such fixes: hstpf-mc --scenario start300-prior). The prior's fix (kept
+ * in pend_y, aged since) and this one place the models again. Time has
+ * advanced; free_run: the traction is not to be used. */
+static void prior_replace(hstpf_t *f, const hstpf_input_t *in, int free_run)
+{
+    const double t = f->pend_age_s, v = t > 0.0 ? (in->position_m - f->pend_y) / t : 0.0;
+    ++f->reacquired;
+    hstpf__drop_lock(f, 0);
+    f->have_pend = 1;
+    (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
+}
+
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
 {
     int has_y = (in != NULL && in->has_position) ? 1 : 0, gated = 0, weigh, free_run, trac_known;
@@ -523,6 +540,12 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         return HSTPF_OK;
     }
     if (has_y && f->cfg.gate_m > 0.0 && hstpf__fix_gate(f, in->position_m, in->dt_s)) {
+        if (f->prior_lock) {
+            advance_time(f, in->dt_s);
+            prior_replace(f, in, free_run);
+            hstpf__update_declaration(f, in->dt_s, 0);
+            return HSTPF_OK;
+        }
         if (f->cfg.reacquire_after == 0u || f->outlier_run < f->cfg.reacquire_after) {
             ++f->outliers;
             f->outlier_run = (uint16_t)(f->outlier_run + (f->outlier_run < UINT16_MAX)); /* saturates: 0 means valid */
@@ -651,6 +674,13 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         if (has_y && (f->pr.active || f->pr.timed)) {
             hstpf__probation(f, s_m, in->position_m);
         }
+    }
+    if (has_y && f->prior_lock) {
+        if (f->lost_run != 0u) {
+            prior_replace(f, in, free_run);
+            return HSTPF_OK;
+        }
+        f->prior_lock = 0; /* the prior's speed confirmed by a fix */
     }
     if (f->cfg.reacquire_after > 0u && (f->lost_run >= f->cfg.reacquire_after ||
                                          (f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && !f->weights_wait &&

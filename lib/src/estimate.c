@@ -328,7 +328,7 @@ int32_t hstpf_estimate(const hstpf_t *f, hstpf_estimate_t *out)
     /* a gated last fix: the fixes and the estimate disagree beyond the
      * gate (a reference jump, or a time base that stepped), so the estimate
      * is not to be trusted until they agree again or it re-acquires */
-    out->valid = (uint8_t)(f->have_fix && f->outlier_run == 0u && f->lost_run == 0u && !f->pr.active &&
+    out->valid = (uint8_t)(f->have_fix && !f->prior_lock && f->outlier_run == 0u && f->lost_run == 0u && !f->pr.active &&
                            in_ranges(out));
     return HSTPF_OK;
 }

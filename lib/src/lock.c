@@ -83,6 +83,10 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
         hstpf__refine_replace_sv(f, m0->kx[0], m0->kx[1], m0->kp[0], m0->kp[1], m0->kp[2]);
     }
     f->have_pend = 0;
+    /* a prior's lock keeps its fix: a gated next fix pairs with it */
+    f->prior_lock = (uint8_t)(q.t12 == 0.0);
+    f->pend_y = y;
+    f->pend_age_s = 0.0;
     f->have_fix = 1;
     f->ever_locked = 1;
     f->outlier_run = 0;
@@ -205,6 +209,7 @@ int hstpf__ran_backwards(hstpf_t *f, double s, double y)
 void hstpf__drop_lock(hstpf_t *f, int keep_pend)
 {
     f->have_fix = 0;
+    f->prior_lock = 0;
     if (!keep_pend) {
         f->have_pend = 0;
     }

@@ -460,12 +460,15 @@ static void test_beyond_ranges_invalid(void **state)
         base_config(&c, engines[i], 1);
         c.init_speed_mps = 100.0;
         c.init_speed_sd = 1.0;
-        /* position: 500 m short of the limit at 100 m/s, held (u = W) */
+        /* position: 500 m short of the limit at 100 m/s, held (u = W); the
+         * prior is valid once a fix confirms it */
         start(&c);
         assert_int_equal(step(1.0, 0.0, HSTPF_POS_MAX_M - 500.0, 1), HSTPF_OK);
+        assert_false(est().valid);
+        assert_int_equal(step(1.0, hstpf_resistance(&rows[0], 100.0), HSTPF_POS_MAX_M - 400.0, 1), HSTPF_OK);
         e = est();
         assert_true(e.valid);
-        for (k = 1; k <= 10; ++k) {
+        for (k = 2; k <= 10; ++k) {
             assert_int_equal(step(1.0, hstpf_resistance(&rows[0], 100.0), 0.0, 0), HSTPF_OK);
             e = est();
             /* 100 m/s: past the limit after 5 s (with a few m of spread) */
@@ -479,6 +482,7 @@ static void test_beyond_ranges_invalid(void **state)
         /* speed: full traction, about 9 m/s^2, passes 200 m/s within 15 s */
         start(&c);
         assert_int_equal(step(1.0, 0.0, 1000.0, 1), HSTPF_OK);
+        assert_int_equal(step(1.0, hstpf_resistance(&rows[0], 100.0), 1100.0, 1), HSTPF_OK);
         for (k = 1; k <= 20; ++k) {
             assert_int_equal(step(1.0, HSTPF_U_MAX, 0.0, 0), HSTPF_OK);
             e = est();
@@ -490,6 +494,56 @@ static void test_beyond_ranges_invalid(void **state)
         }
         assert_true((double)e.speed_mps > HSTPF_SPEED_MAX + 1.0);
         assert_false(e.valid);
+    }
+}
+
+/* ---- a configured speed prior, confirmed or contradicted ----------------- */
+
+/* A unit configured for a power-up at rest (0 +- 1 m/s) that starts while
+ * the train runs at V_TRUE: nothing is valid on the prior alone; the next
+ * fix, V_TRUE m further (beyond the gate: 50 sd of the prior's spread),
+ * places the models again from the two fixes, whose speed is their
+ * difference, 50 - 2.0 sin(1.7) + ... (fix_at) within the pair's 3.2 m/s
+ * sd. A train that really stands takes the prior: valid at the second fix
+ * at 0 +- 1, one acquisition. Each engine. */
+static void test_prior_confirmed_or_replaced(void **state)
+{
+    int i, k;
+    (void)state;
+    for (i = 0; i < 3; ++i) {
+        hstpf_config_t c;
+        hstpf_estimate_t e;
+        base_config(&c, engines[i], 2);
+        c.init_speed_mps = 0.0;
+        c.init_speed_sd = 1.0;
+        start(&c);
+        assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
+        e = est();
+        assert_false(e.valid);
+        assert_int_equal(step(1.0, u_hold(), fix_at(1.0), 1), HSTPF_OK);
+        e = est();
+        assert_true(e.valid);
+        assert_int_equal(e.acquisitions, 2);
+        assert_int_equal(e.reacquired, 1);
+        assert_float_equal((double)e.speed_mps, fix_at(1.0) - fix_at(0.0), 3.0 * 3.2);
+        for (k = 2; k <= 30; ++k) {
+            assert_int_equal(step(1.0, u_hold(), fix_at((double)k), 1), HSTPF_OK);
+            e = est();
+            assert_true(e.valid);
+            assert_float_equal((double)e.speed_mps, V_TRUE, 5.0 * (double)e.speed_sd_mps + 0.5);
+        }
+        /* at rest: the same fix, give or take 2 m, and the holding brake */
+        start(&c);
+        for (k = 0; k <= 10; ++k) {
+            assert_int_equal(step(1.0, -50.0, Y0 + 2.0 * sin(1.7 * k), 1), HSTPF_OK);
+            e = est();
+            assert_int_equal(e.valid, k >= 1);
+            assert_int_equal(e.acquisitions, 1);
+            if (k >= 1) {
+                assert_true(fabs((double)e.speed_mps) <= 3.0 * (double)e.speed_sd_mps + 0.05);
+                assert_true((double)e.speed_sd_mps <= 1.0 + 1e-6);
+            }
+        }
     }
 }
 
@@ -1595,6 +1649,7 @@ int main(void)
         cmocka_unit_test(test_resample_no_weight),
         cmocka_unit_test(test_pending_fix_expires),
         cmocka_unit_test(test_beyond_ranges_invalid),
+        cmocka_unit_test(test_prior_confirmed_or_replaced),
         cmocka_unit_test(test_valid_within_ranges),
         cmocka_unit_test(test_prior_only_at_start),
         cmocka_unit_test(test_reset_is_a_new_start),

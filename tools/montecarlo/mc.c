@@ -66,6 +66,9 @@ typedef struct {
      * fix_off_s, again every fix_off_every_s with the sign alternating (0 =
      * once): a GNSS bias that steps, a lone outlier */
     double fix_off_m, fix_off_at_s, fix_off_s, fix_off_every_s;
+    /* > 0: the unit is configured for a power-up at rest, a speed prior
+     * N(0, init_speed_sd^2) (0 = the default, the speed from two fixes) */
+    double init_speed_sd;
 } scenario_t;
 
 typedef struct timetable {
@@ -499,6 +502,10 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
     cfg.seed = 0x9E3779B97F4A7C15ull ^ (7919ull * (uint64_t)(truth + 1) + (uint64_t)seed);
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
+    if (w->sc->init_speed_sd > 0.0) {
+        cfg.init_speed_mps = 0.0;
+        cfg.init_speed_sd = w->sc->init_speed_sd;
+    }
     cfg.noise_e = sc.noise_e;
     if (w->st->gauss_e && cfg.noise_e.kind != HSTPF_DIST_GAUSSIAN) {
         /* a filter that knows only the variance: what knowing the density buys */
@@ -1068,6 +1075,9 @@ static const scenario_t scenarios[] = {
     {.name = "stops", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
     {.name = "day", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 14400.0, .tt = &day_tt},
     {.name = "start300", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt},
+    /* the same with the unit configured for a power-up at rest (speed prior 0 +- 1 m/s): a unit that
+     * starts or restarts while the train runs */
+    {.name = "start300-prior", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt, .init_speed_sd = 1.0},
     {.name = "clock+30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 30.0, .clock_at_s = CLOCK_AT_S},
     {.name = "clock-30", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = -30.0, .clock_at_s = CLOCK_AT_S},
     /* a receive clock that steps 1 s or 3 s forward at 300 km/h (hstpfd predicts across it: the step

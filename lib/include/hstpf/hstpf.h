@@ -239,7 +239,10 @@ typedef struct {
      *  at the first lock after hstpf_init or hstpf_reset; a lock regained
      *  later (an outage, a clock step, a run of gated fixes,
      *  hstpf_reacquire) takes the speed from two fixes, whatever the
-     *  train's speed has become. */
+     *  train's speed has become. The prior is a guess until a fix confirms
+     *  it: the estimate is not valid before a later fix passes the gate,
+     *  and a gated one (a unit that started while the train runs) places
+     *  the models again from it and the prior's fix. */
     double init_speed_sd;
     hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
     double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
@@ -488,7 +491,8 @@ typedef struct {
     hstpf_real_t speed_sd_mps;
     /** 1 when every published value is finite and within the ranges this
      *  header documents, the filter has lock on the train (acquired from
-     *  fixes and not lost since) and the latest fix was neither gated nor
+     *  fixes and not lost since; from the configured speed prior, once a
+     *  later fix has confirmed it) and the latest fix was neither gated nor
      *  beyond the likelihood floor of every weighted model; 0
      *  otherwise: consumers must not use the states, theta or resistance. */
     uint8_t valid;
@@ -753,7 +757,8 @@ typedef struct {
     double free_s;                   /* time without a fix used while the traction is unknown */
     uint8_t mix_pending;             /* a standstill of HSTPF_CONSIST_STOP_S ended: mix at the next weighted step */
     uint8_t ever_locked;
-    double pend_y;                   /* that fix, absolute m */
+    uint8_t prior_lock;              /* locked from the configured speed prior, no fix fitted since */
+    double pend_y;                   /* that fix (after a prior_lock: its fix), absolute m */
     double pend_age_s;               /* time since it */
     uint32_t acquisitions, nonfinite_resets;
     uint32_t backward;               /* fix pairs refused, locks dropped or taken on probation: hstpf_estimate_t */
