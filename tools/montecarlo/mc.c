@@ -41,7 +41,8 @@ typedef struct {
     const struct timetable *tt; /* the truth runs this timetable (profile JOURNEY) */
     double clock_step_s;        /* receive-clock step at clock_at_s, s (0 = none) */
     double clock_at_s;
-    int outage;                 /* GNSS outage of 20-60 s during an acceleration */
+    int outage;                 /* GNSS outage of 20-60 s: 1 during an acceleration, 2 across a stop
+                                 * (from 10 m/s braking into it, ~20 s before the train stands) */
     double gain_bias;           /* traction reported = (1 + gain_bias) x applied */
     double sign_flip_at_s;      /* > 0: from then on the traction is reported with the wrong sign */
     /* trains not on Table 1 (issue 10; zero for the others) */
@@ -647,8 +648,12 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
                 in.position_m += fmod(n, 2.0) == 0.0 ? w->sc->fix_off_m : -w->sc->fix_off_m;
             }
         }
-        if (w->sc->outage && out_start < 0.0 && sim.leg == OUTAGE_LEG &&
+        if (w->sc->outage == 1 && out_start < 0.0 && sim.leg == OUTAGE_LEG &&
             sim.phase == HSTPF_SIM_RUN && smp.t - sim.phase_t0 >= OUTAGE_AFTER_S) {
+            out_start = smp.t;
+        }
+        if (w->sc->outage == 2 && out_start < 0.0 && sim.leg == OUTAGE_LEG && sim.phase == HSTPF_SIM_BRAKING &&
+            smp.v <= 10.0) {
             out_start = smp.t;
         }
         if (out_start >= 0.0 && smp.t < out_start + jr->outage_s) {
@@ -1085,6 +1090,8 @@ static const scenario_t scenarios[] = {
     {.name = "clock+1", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 1.0, .clock_at_s = CLOCK_AT_S},
     {.name = "clock+3-t", .paper_case = 3, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .clock_step_s = 3.0, .clock_at_s = CLOCK_AT_S},
     {.name = "outage", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .outage = 1},
+    /* the outage across the second station's stop: braking into it from 10 m/s under the reported brake */
+    {.name = "outage-stop", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .outage = 2},
     {.name = "gain5", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .gain_bias = 0.05},
     /* trains not on Table 1: the line, each coefficient 10 / 15 / 20 % off its row; an
      * unmodelled 8 per-mille climb; all three by one mass-like factor 10 / 20 %; the
