@@ -123,19 +123,23 @@ typedef struct {
 int hstpf__kalman_rest(double vd, double pyy, double mu_w, double q_w, hstpf__rest_t *out);
 /* The same on a filter's mean x and n x n covariance p (row-major, the
  * speed at index 1) after the step without the speed noise (y's variance
- * in p[n + 1]): sets the speed's mean, row and column, adds the noise
+ * in p[n + 1]; v the speed's mean before the step, vd after it): sets the speed's mean, row and column, adds the noise
  * (q_w + acc_var) to a train that moves; returns hstpf_model_t.held. With
  * the traction unknown (free_run) no model holds the train: at rest only
  * if vd < 0. *rest is the model's timer (HSTPF__REST_SETTLE_S; kept by
  * the caller, zeroed at placing), dt the step. The Kalman engine's rows and the
  * continuous hypothesis' EKF both step their speed through it. */
-uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double vd, int free_run, double mu_w, double q_w,
-                                 double acc_var, double dt, hstpf_settle_t *rest);
+uint8_t hstpf__kalman_rest_speed(double *x, double *p, int n, double v, double vd, int free_run, double mu_w,
+                                 double q_w, double acc_var, double dt, hstpf_settle_t *rest);
 /* The timer's evidence, after a step's fix yr (relative) that the filter
  * predicted N(s, pss): while the timer runs, the fix is scored under
  * "stood still since the timer began" and under the filter's prediction,
  * both on the noise's moments, and the log ratio summed. */
 void hstpf__settle_fix(const hstpf_t *f, hstpf_settle_t *c, double s, double pss, double yr);
+/* After a fix moved a row's position by ds and its variance from pss to
+ * pss_post: the unclamped speed kept while stopping (kalman_rest.c), if
+ * any, moves with it by its regression on the position. */
+void hstpf__kalman_rest_fix(hstpf_settle_t *c, double pss, double ds, double pss_post);
 
 /* A fix scored by the fix noise's real density against a Gaussian
  * prediction N(s, pss) of the position (kalman_fix.c). */

@@ -112,7 +112,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         p[0] = qss;
         p[1] = p[2] = fvv * (psv + dt * pvv);
         p[3] = fvv * fvv * pvv;
-        *held = hstpf__kalman_rest_speed(x, p, 2, vd, st->free_run, scale * nm[2], sc2 * nm[3] * nm[3], st->acc_var, dt,
+        *held = hstpf__kalman_rest_speed(x, p, 2, v, vd, st->free_run, scale * nm[2], sc2 * nm[3] * nm[3], st->acc_var, dt,
                                          &m->rest);
         nv = x[1];
         qsv = p[1];
@@ -153,6 +153,7 @@ double hstpf__kalman_step(hstpf_t *f, hstpf_model_t *m, const hstpf__step_t *st,
         /* qss (1 - qss / sy) with qss <= sy: never below 0, even rounded */
     }
     if (st->has_y) {
+        hstpf__kalman_rest_fix(&m->rest, p_pred, ns - s_pred, qss);
         hstpf__settle_fix(f, &m->rest, s_pred, p_pred, st->yr);
     }
     m->kx[0] = ns;

@@ -186,7 +186,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
          * moving with its noise) */
         z[0] += dt * v + st->scale * nm[0];
         propagate(p, f0, f1, sc2 * nm[1] * nm[1], 0.0);
-        r->held = hstpf__kalman_rest_speed(z, p, NZ, vd, st->free_run, st->scale * nm[2], sc2 * nm[3] * nm[3],
+        r->held = hstpf__kalman_rest_speed(z, p, NZ, v, vd, st->free_run, st->scale * nm[2], sc2 * nm[3] * nm[3],
                                            st->acc_var, dt, &r->rest);
     }
     r->loglik = 0.0;
@@ -245,6 +245,7 @@ void hstpf__refine_update(hstpf_t *f, const hstpf__step_t *st)
         }
     }
     if (st->has_y) {
+        r->rest.zp = 0; /* its z only across steps without a fix (kalman_rest.c) */
         hstpf__settle_fix(f, &r->rest, s_pred, p_pred, st->yr);
     }
     z[1] = z[1] > 0.0 ? z[1] : 0.0; /* a train never reverses */

@@ -633,6 +633,8 @@ typedef struct {
     double t;                             /* time it has looked at rest, s */
     hstpf_real_t s, p;                    /* that position's mean (rel.) and variance; p 0: not begun */
     hstpf_real_t llr;                     /* log LR of the fixes since, stood still against the filter */
+    hstpf_real_t zv, zp, zc;              /* stopping: the speed unclamped at 0, its variance (0: none) and
+                                           * covariance with the position (kalman_rest.c) */
 } hstpf_settle_t;
 
 /* Private per-model state. */
