@@ -70,6 +70,12 @@ typedef struct {
     /* > 0: the unit is configured for a power-up at rest, a speed prior
      * N(0, init_speed_sd^2) (0 = the default, the speed from two fixes) */
     double init_speed_sd;
+    /* > 0: the step and the filter's dt_nominal_s, s (0 = 1 s): a unit stepped at 10 Hz; the
+     * process noises are Case 1's per second scaled to the step (a random walk's variance in
+     * proportion to T) unless step_noise_per_step, when Case 1's per-step figures are taken
+     * per step as given (ten times the variance per second at 10 Hz); a fix every step */
+    double step_s;
+    int step_noise_per_step;
 } scenario_t;
 
 typedef struct timetable {
@@ -501,6 +507,14 @@ static void one_run(const work_t *w, int truth, int seed, run_t *r, FILE *trace)
         jr->outage_s = 20.0 + (double)(hstpf_rng_next(&orng) % 41u); /* 20..60 s */
     }
     cfg.seed = 0x9E3779B97F4A7C15ull ^ (7919ull * (uint64_t)(truth + 1) + (uint64_t)seed);
+    if (w->sc->step_s > 0.0) {
+        sc.dt_s = w->sc->step_s;
+        cfg.dt_nominal_s = w->sc->step_s;
+        if (!w->sc->step_noise_per_step) {
+            sc.noise_s.sd *= sqrt(w->sc->step_s);
+            sc.noise_v.sd *= sqrt(w->sc->step_s);
+        }
+    }
     cfg.noise_s = sc.noise_s;
     cfg.noise_v = sc.noise_v;
     if (w->sc->init_speed_sd > 0.0) {
@@ -1080,6 +1094,12 @@ static const scenario_t scenarios[] = {
     {.name = "stops", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt},
     {.name = "day", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 14400.0, .tt = &day_tt},
     {.name = "start300", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt},
+    /* the line stepped at 10 Hz, a fix every step: Case 1's train (its noises per second scaled to
+     * 0.1 s), and Case 1's figures taken per 0.1 s step (a noisier train) */
+    {.name = "stops-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_s = 0.1},
+    {.name = "all17-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .step_s = 0.1},
+    {.name = "all17-10hz-raw", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .step_s = 0.1, .step_noise_per_step = 1},
+    {.name = "stops-10hz-raw", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_s = 0.1, .step_noise_per_step = 1},
     /* the same with the unit configured for a power-up at rest (speed prior 0 +- 1 m/s): a unit that
      * starts or restarts while the train runs */
     {.name = "start300-prior", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 1800.0, .tt = &start300_tt, .init_speed_sd = 1.0},
