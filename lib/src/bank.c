@@ -584,17 +584,19 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     st.free_run = free_run;
     /* the unknown acceleration as a zero-mean Gaussian on the speed, a
      * random walk like the noises (variance in proportion to T): sd
-     * accel_unknown_sd dt_nominal over a nominal step; the configured
-     * noises keep their shape and mean */
+     * accel_unknown_sd tau over a step of tau = max(dt_nominal,
+     * HSTPF__ACC_PERSIST_S); the configured noises keep their shape and
+     * mean */
     if (free_run) {
         /* across steps without a fix the unknown acceleration persists (a
          * brake or a traction is held for tens of seconds, not redrawn each
          * step): over a span t without one its variance on the speed is
-         * accel_unknown_sd^2 t max(t, dt_nominal), the random walk's up to a
-         * nominal step and (sd t)^2 beyond. The random walk alone made a
+         * accel_unknown_sd^2 t max(t, tau), the random walk's up to tau
+         * and (sd t)^2 beyond. The random walk alone made a
          * minute without any input at 300 km/h, the train braking in it,
          * 13-23 m/s off at 3-6 sd (hstpf-mc --scenario silent) */
-        const double a2 = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd, dn = f->cfg.dt_nominal_s;
+        const double a2 = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd;
+        const double dn = f->cfg.dt_nominal_s > HSTPF__ACC_PERSIST_S ? f->cfg.dt_nominal_s : HSTPF__ACC_PERSIST_S;
         /* no longer than it takes the acceleration to span the speed
          * range: beyond, the spread grew without bound and the grid's box
          * went non-finite (the fuzz harness, a NaN cast in grid_box.c) */

@@ -285,12 +285,14 @@ typedef struct {
     double max_gap_s;
     /** While the traction is unknown (hstpf_input_t.traction_unknown) the
      *  train's acceleration is taken as 0 with this sd, m/s^2: a zero-mean
-     *  Gaussian added to the speed, of variance accel_unknown_sd^2 T
-     *  dt_nominal_s over a step of T (a random walk, as the noises scale)
-     *  while fixes come; across steps without a fix the acceleration
-     *  persists: over a span t without one the variance is
-     *  accel_unknown_sd^2 t max(t, dt_nominal_s); (0, 10] (0.5: about a
-     *  high-speed train's service traction and braking). */
+     *  Gaussian added to the speed, of variance accel_unknown_sd^2 T tau
+     *  over a step of T, tau = max(dt_nominal_s, 1 s) (a random walk, as
+     *  the noises scale, whose acceleration lasts at least a second, at
+     *  any step rate) while fixes come; across steps without a fix the
+     *  acceleration persists: over a span t without one the variance is
+     *  accel_unknown_sd^2 t max(t, tau). The traction check's shadow takes
+     *  the same. (0, 10] (0.5: about a high-speed train's service traction
+     *  and braking). */
     double accel_unknown_sd;
     /** Measurements farther than this from the predicted position are
      *  not used (the step predicts; HSTPF_E_OUTLIER), m; 0 = no gate (1000).
