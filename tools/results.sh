@@ -55,7 +55,7 @@ done
 fi
 if section journeys; then
 echo "== journeys: 17 types, the library's defaults (no option), Case 1 noise"
-for s in stops day start300 clock+30 clock-30 clock+1 clock+3-t outage gain5 restart tracgap silent swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
+for s in stops day start300 start300-prior clock+30 clock-30 clock+1 clock+3-t outage outage-stop gain5 restart tracgap silent swap swap-near gap29 fix5 stuck30 late10 late60 shunt4; do
   echo "== $s"
   oracle=()
   case $s in stops) oracle=(--oracle) ;; esac
@@ -69,6 +69,13 @@ for s in couple couple-near; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --consist-p 0 | tee "$out/$s-p0.txt"
+done
+# a unit stepped at 10 Hz, a fix every step: Case 1's train (noises scaled to 0.1 s) and Case 1's
+# figures taken per 0.1 s step, on the line and on the paper's run, with the traction check and without it
+for s in stops-10hz all17-10hz stops-10hz-raw all17-10hz-raw; do
+  echo "== $s"
+  "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
+  "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"
 done
 # a traction present but wrong (its sign swapped; a gain 20 % low), with the traction check and without it
 for s in tracsign gain-20; do

@@ -337,8 +337,9 @@ static int finite_models(const hstpf_t *f)
  * move it, a few tenths of a m/s apart, or some may have come to rest
  * (HSTPF__HELD_STOPPING). A fix then scores "has it stopped yet", which
  * the fix noise decides, not W(v): the weights wait until the models
- * agree, for at most HSTPF__ARRIVAL_MAX_S (a train that really moves then
- * releases them). Returns 2 at standstill, 1 arriving, else 0. */
+ * agree, for at most HSTPF__ARRIVAL_MAX_S of steps with a fix (dt is 0 on
+ * one without; a train that really moves then releases them). Returns 2
+ * at standstill, 1 arriving, else 0. */
 static int weights_hold(hstpf_t *f, double dt)
 {
     double wb[HSTPF_MAX_MODELS + 1];

@@ -7,8 +7,9 @@
 
 #define HSTPF_MAGIC 0x48535446u /* "HSTF": set by hstpf_init */
 /* Longest arrival at rest (some weighted models held, others moving) over
- * which the weights wait, s: braking from the speeds where the models
- * disagree (< 1 m/s) takes a few seconds; longer means a real disagreement */
+ * which the weights wait, s of steps with a fix: braking from the speeds
+ * where the models disagree (< 1 m/s) takes a few seconds; longer means a
+ * real disagreement */
 #define HSTPF__ARRIVAL_MAX_S 10.0
 /* m/s^2 added to a traction made up to balance a resistance (the traction
  * unknown, the traction check's shadow): no model then holds the train at
