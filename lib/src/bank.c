@@ -107,6 +107,8 @@ static void reset_state(hstpf_t *f)
     f->have_pend = 0;
     f->ever_locked = 0;
     f->prior_lock = 0;
+    f->fix_age_s = 0.0;
+    f->fix_gap_s = 0.0;
     f->acquisitions = 0;
     f->nonfinite_resets = 0;
     f->backward = 0;
@@ -337,9 +339,9 @@ static int finite_models(const hstpf_t *f)
  * move it, a few tenths of a m/s apart, or some may have come to rest
  * (HSTPF__HELD_STOPPING). A fix then scores "has it stopped yet", which
  * the fix noise decides, not W(v): the weights wait until the models
- * agree, for at most HSTPF__ARRIVAL_MAX_S of steps with a fix (dt is 0 on
- * one without; a train that really moves then releases them). Returns 2
- * at standstill, 1 arriving, else 0. */
+ * agree, for at most HSTPF__ARRIVAL_MAX_S counted on fixes (dt: 0 on a
+ * step without one; a train that really moves then releases them).
+ * Returns 2 at standstill, 1 arriving, else 0. */
 static int weights_hold(hstpf_t *f, double dt)
 {
     double wb[HSTPF_MAX_MODELS + 1];
@@ -485,12 +487,12 @@ static void engines_step(hstpf_t *f, const hstpf__engine_t *e, const hstpf__step
     engines_substep(f, e, &sub);
 }
 
-/* The first fix after a lock from the configured speed prior is gated,
- * or beyond every weighted model's floor: the prior was wrong (a unit
- * configured for a power-up at rest that started while the train runs
- * published 0 +- 1 m/s valid at 300 km/h, then re-acquired after two
- * such fixes: hstpf-mc --scenario start300-prior). The prior's fix (kept
- * in pend_y, aged since) and this one place the models again. Time has
+/* Two fixes in a row after a lock from the configured speed prior are
+ * gated, or beyond every weighted model's floor: the prior was wrong (a
+ * unit configured for a power-up at rest that started while the train
+ * runs published 0 +- 1 m/s valid at 300 km/h: hstpf-mc --scenario
+ * start300-prior). The fix in pend_y (the prior's, aged since; or the
+ * first gated one) and this one place the models again. Time has
  * advanced; free_run: the traction is not to be used. */
 static void prior_replace(hstpf_t *f, const hstpf_input_t *in, int free_run)
 {
@@ -541,7 +543,9 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         return HSTPF_OK;
     }
     if (has_y && f->cfg.gate_m > 0.0 && hstpf__fix_gate(f, in->position_m, in->dt_s)) {
-        if (f->prior_lock) {
+        if (f->prior_lock && f->outlier_run > 0u) {
+            /* a second gated fix in a row after the prior's lock: pairs
+             * with the first (kept in pend_y by the gated path below) */
             advance_time(f, in->dt_s);
             prior_replace(f, in, free_run);
             hstpf__update_declaration(f, in->dt_s, 0);
@@ -611,11 +615,21 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     }
     engines_step(f, e, &st);
     {
-        /* the arrival's wait runs on fixes: an outage across a stop spent
-         * it with none to weigh, and the first fix after it moved the
-         * weights while the rows still disagreed on having stopped
-         * (hstpf-mc --scenario outage-stop: TV up to 0.41 across the stop) */
-        const int hold = weights_hold(f, has_y ? in->dt_s : 0.0);
+        /* the arrival's wait runs on fixes, each the time since the one
+         * before but no more than the gap before that (or dt_nominal_s):
+         * an outage across a stop spent it with none to weigh, and the
+         * first fix after it moved the weights while the rows still
+         * disagreed on having stopped (hstpf-mc --scenario outage-stop: TV
+         * up to 0.41 across the stop); counted per step with a fix, 10 Hz
+         * steps with a fix a second made it 100 s (a review) */
+        const double cap = f->fix_gap_s > f->cfg.dt_nominal_s ? f->fix_gap_s : f->cfg.dt_nominal_s;
+        int hold;
+        f->fix_age_s += in->dt_s;
+        hold = weights_hold(f, has_y ? (f->fix_age_s < cap ? f->fix_age_s : cap) : 0.0);
+        if (has_y) {
+            f->fix_gap_s = f->fix_age_s;
+            f->fix_age_s = 0.0;
+        }
         f->standstill = (uint8_t)(hold == 2);
         f->weights_wait = (uint8_t)(hold != 0);
         /* one standstill's length; when one of HSTPF_CONSIST_STOP_S ends,
@@ -683,11 +697,14 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         }
     }
     if (has_y && f->prior_lock) {
-        if (f->lost_run != 0u) {
+        /* two fixes in a row beyond every weighted model's floor: the
+         * prior was wrong; one may be an outlier (a lone 40 m fix at a
+         * platform re-placed the models at 39 m/s, valid: a review) */
+        if (f->lost_run >= 2u) {
             prior_replace(f, in, free_run);
             return HSTPF_OK;
         }
-        f->prior_lock = 0; /* the prior's speed confirmed by a fix */
+        f->prior_lock = (uint8_t)(f->lost_run != 0u); /* 0: the prior's speed confirmed by a fix */
     }
     if (f->cfg.reacquire_after > 0u && (f->lost_run >= f->cfg.reacquire_after ||
                                          (f->engine != (uint8_t)HSTPF_ENGINE_PARTICLE && !f->weights_wait &&

@@ -374,6 +374,8 @@ static void kalman_set(hstpf_model_t *m, double s, double v, double pss, double 
     m->kp[0] = pss;
     m->kp[1] = psv;
     m->kp[2] = pvv;
+    m->rest.zp = 0; /* a stop's unclamped speed is of the state replaced */
+    m->rest.zc = 0;
 }
 
 /* A gridded row's Kalman filter that has lost the train (hstpf__kalman_lost)

@@ -87,6 +87,8 @@ int hstpf__acquire(hstpf_t *f, double y, double xu)
     f->prior_lock = (uint8_t)(q.t12 == 0.0);
     f->pend_y = y;
     f->pend_age_s = 0.0;
+    f->fix_age_s = 0.0;
+    f->fix_gap_s = 0.0;
     f->have_fix = 1;
     f->ever_locked = 1;
     f->outlier_run = 0;

@@ -491,6 +491,57 @@ static void test_arrival_waits(void **state)
     assert_true(e.model[0].q > 0.5f);
 }
 
+/* test_arrival_waits stepped at 10 Hz with a fix every tenth step: the
+ * wait counts the time since the fix before, not the step that brings the
+ * fix, so it still ends within about 10 s of the rows' disagreement and
+ * the data decide. Counted per step with a fix (0.1 s each) it lasted 100
+ * s, the weights stayed 0.495 / 0.495 and the traction check then blamed
+ * the true traction (a review). */
+static void test_arrival_waits_sparse_fixes(void **state)
+{
+    hstpf_config_t c;
+    truth_t t;
+    hstpf_estimate_t e;
+    hstpf_theta_t *const two = models;
+    int k, first_mixed = -1, first_move = -1;
+    double q_prev = -1.0;
+    (void)state;
+    two[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
+    two[1] = two[0];
+    two[1].c0 = 30.0;
+    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
+    c.models = two;
+    c.n_models = 2;
+    c.engine = HSTPF_ENGINE_KALMAN;
+    tu_workspace(&c, 0);
+    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
+    truth_init(&t, "CRH3", 500.0, 2.0, 21);
+    for (k = 0; k < 800; ++k) {
+        const double a = XI * (0.0 - hstpf_resistance(&t.th, t.v));
+        const int has_y = k % 10 == 0;
+        step(k == 0 ? 1.0 : 0.1, 0.0, has_y ? truth_fix(&t) : 0.0, has_y);
+        assert_int_equal(hstpf_estimate(&filt, &e), HSTPF_OK);
+        check_estimate(&e);
+        if (k > 20 && first_mixed < 0 && filt.m[1].held != 0u && filt.m[0].held == 0u) {
+            first_mixed = k;
+        }
+        if (first_mixed >= 0 && first_move < 0 && q_prev >= 0.0 && (double)e.model[1].q != q_prev) {
+            first_move = k;
+        }
+        q_prev = (double)e.model[1].q;
+        t.s += 0.1 * t.v; /* a smooth roll: the truth keeps moving */
+        t.v += 0.1 * a;
+    }
+    print_message("arrival at 10 Hz, a fix a second: rows disagree from %.1f s, weights move from %.1f s, q = %.4f "
+                  "%.4f\n",
+                  0.1 * first_mixed, 0.1 * first_move, (double)e.model[0].q, (double)e.model[1].q);
+    assert_true(t.v > 1.0);
+    assert_true(first_mixed > 0);
+    assert_true(first_move > first_mixed && first_move <= first_mixed + 120); /* within 12 s */
+    assert_true(e.model[1].q < 0.01f);
+    assert_true(e.model[0].q > 0.5f);
+}
+
 /* An outage across a stop: braking at 0.5 m/s^2 from 10 m/s, no fix from
  * then for 20-27 s (the train stands after about 20), the holding brake
  * reported at rest. The arrival's wait (HSTPF__ARRIVAL_MAX_S) runs on
@@ -1504,6 +1555,7 @@ int main(void)
         cmocka_unit_test(test_consist_theta),         cmocka_unit_test(test_release_ends),
         cmocka_unit_test(test_fix_step),              cmocka_unit_test(test_shunting_not_held),
         cmocka_unit_test(test_check_at_10hz),         cmocka_unit_test(test_outage_stop_waits),
+        cmocka_unit_test(test_arrival_waits_sparse_fixes),
         cmocka_unit_test(test_fix_step_heavy),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

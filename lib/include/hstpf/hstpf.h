@@ -240,9 +240,11 @@ typedef struct {
      *  later (an outage, a clock step, a run of gated fixes,
      *  hstpf_reacquire) takes the speed from two fixes, whatever the
      *  train's speed has become. The prior is a guess until a fix confirms
-     *  it: the estimate is not valid before a later fix passes the gate,
-     *  and a gated one (a unit that started while the train runs) places
-     *  the models again from it and the prior's fix. */
+     *  it: the estimate is not valid before a later fix passes the gate
+     *  within some weighted model's floor; two in a row that do not (a
+     *  unit that started while the train runs) place the models again
+     *  from the latter and the prior's fix (or the first gated one),
+     *  counted in hstpf_estimate_t.reacquired. */
     double init_speed_sd;
     hstpf_resample_t resample;   /**< policy (HSTPF_RESAMPLE_ESS) */
     double ess_threshold;        /**< fraction of particles, (0, 1] (0.5) */
@@ -291,7 +293,7 @@ typedef struct {
      *  any step rate) while fixes come; across steps without a fix the
      *  acceleration persists: over a span t without one the variance is
      *  accel_unknown_sd^2 t max(t, tau). The traction check's shadow takes
-     *  the same. (0, 10] (0.5: about a high-speed train's service traction
+     *  accel_unknown_sd^2 T tau on every step. (0, 10] (0.5: about a high-speed train's service traction
      *  and braking). */
     double accel_unknown_sd;
     /** Measurements farther than this from the predicted position are
@@ -534,7 +536,7 @@ typedef struct {
     /** measurements not used: beyond the gate, or held as a possible
      *  step's first fix (cfg.fix_step) */
     uint32_t outliers;
-    uint32_t reacquired;    /**< re-acquisitions after consecutive outliers */
+    uint32_t reacquired;    /**< re-acquisitions after consecutive outliers, or fixes that contradict the speed prior */
     /** steps in the fixes' reference taken: the position moved by them,
      *  the speed did not (cfg.fix_step) */
     uint32_t fix_steps;
@@ -759,6 +761,7 @@ typedef struct {
     double arrival_s;                /* time the weighted models disagreed on being at rest */
     double stop_s;                   /* time this standstill has lasted */
     double free_s;                   /* time without a fix used while the traction is unknown */
+    double fix_age_s, fix_gap_s;     /* time since the last fix used, and between it and the one before */
     uint8_t mix_pending;             /* a standstill of HSTPF_CONSIST_STOP_S ended: mix at the next weighted step */
     uint8_t ever_locked;
     uint8_t prior_lock;              /* locked from the configured speed prior, no fix fitted since */
