@@ -38,6 +38,14 @@ static void base_config(hstpf_config_t *c, hstpf_engine_t engine, uint16_t n_mod
     c->engine = engine;
 }
 
+/* base_config with a configured speed prior N(v0, 1 m/s). */
+static void prior_config(hstpf_config_t *c, hstpf_engine_t engine, uint16_t n_models, double v0)
+{
+    base_config(c, engine, n_models);
+    c->init_speed_mps = v0;
+    c->init_speed_sd = 1.0;
+}
+
 /* The instance from c, with a workspace for its engine. */
 static void start(hstpf_config_t *c)
 {
@@ -457,9 +465,7 @@ static void test_beyond_ranges_invalid(void **state)
     for (i = 0; i < 3; ++i) {
         hstpf_config_t c;
         hstpf_estimate_t e;
-        base_config(&c, engines[i], 1);
-        c.init_speed_mps = 100.0;
-        c.init_speed_sd = 1.0;
+        prior_config(&c, engines[i], 1, 100.0);
         /* position: 500 m short of the limit at 100 m/s, held (u = W); the
          * prior is valid once a fix confirms it */
         start(&c);
@@ -516,9 +522,7 @@ static void test_prior_confirmed_or_replaced(void **state)
     for (i = 0; i < 3; ++i) {
         hstpf_config_t c;
         hstpf_estimate_t e;
-        base_config(&c, engines[i], 2);
-        c.init_speed_mps = 0.0;
-        c.init_speed_sd = 1.0;
+        prior_config(&c, engines[i], 2, 0.0);
         start(&c);
         assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
         e = est();

@@ -447,14 +447,12 @@ static void test_nonfinite_reset(void **state)
  * that stopped. Coasting (u = 0) from 2 m/s, the truth's resistance
  * (CRH3) stops it only after minutes; the second model's c0 = 30 N/kN
  * stops it within 8 s (a = -xi c0 = -0.28 m/s^2). */
-static void test_arrival_waits(void **state)
+/* The arrival's bank: CRH3 and a CRH3 with c0 = 30 (it stops a coasting
+ * train far sooner), Kalman engine; a CRH3 truth rolling at 2 m/s. */
+static void arrival_start(truth_t *t)
 {
     hstpf_config_t c;
-    truth_t t;
-    hstpf_estimate_t e, before;
     hstpf_theta_t *const two = models; /* check_estimate() reads models[] */
-    int k, mixed = 0, moved_while_mixed = 0, first_mixed = -1;
-    (void)state;
     two[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
     two[1] = two[0];
     two[1].c0 = 30.0;
@@ -464,7 +462,16 @@ static void test_arrival_waits(void **state)
     c.engine = HSTPF_ENGINE_KALMAN;
     tu_workspace(&c, 0);
     assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 500.0, 2.0, 21);
+    truth_init(t, "CRH3", 500.0, 2.0, 21);
+}
+
+static void test_arrival_waits(void **state)
+{
+    truth_t t;
+    hstpf_estimate_t e, before;
+    int k, mixed = 0, moved_while_mixed = 0, first_mixed = -1;
+    (void)state;
+    arrival_start(&t);
     t.sd_s = 0.0; /* a smooth roll, so the truth itself keeps moving */
     t.sd_v = 0.0;
     memset(&before, 0, sizeof before);
@@ -499,23 +506,12 @@ static void test_arrival_waits(void **state)
  * the true traction (a review). */
 static void test_arrival_waits_sparse_fixes(void **state)
 {
-    hstpf_config_t c;
     truth_t t;
     hstpf_estimate_t e;
-    hstpf_theta_t *const two = models;
     int k, first_mixed = -1, first_move = -1;
     double q_prev = -1.0;
     (void)state;
-    two[0] = hstpf_train_types[hstpf_train_type_find("CRH3")];
-    two[1] = two[0];
-    two[1].c0 = 30.0;
-    assert_int_equal(hstpf_config_default(&c), HSTPF_OK);
-    c.models = two;
-    c.n_models = 2;
-    c.engine = HSTPF_ENGINE_KALMAN;
-    tu_workspace(&c, 0);
-    assert_int_equal(hstpf_init(&filt, sizeof filt, &c), HSTPF_OK);
-    truth_init(&t, "CRH3", 500.0, 2.0, 21);
+    arrival_start(&t);
     for (k = 0; k < 800; ++k) {
         const double a = XI * (0.0 - hstpf_resistance(&t.th, t.v));
         const int has_y = k % 10 == 0;
