@@ -514,7 +514,7 @@ static void test_beyond_ranges_invalid(void **state)
  * A train that really stands takes the prior: valid at the second fix at
  * 0 +- 1, one acquisition; and a lone 40 m outlier there as that fix
  * leaves it (re-placed on it, 39 m/s was published valid: a review).
- * Each engine. */
+ * Behind a tight gate, two gated fixes pair. Each engine. */
 static void test_prior_confirmed_or_replaced(void **state)
 {
     int i, k, lone;
@@ -557,6 +557,21 @@ static void test_prior_confirmed_or_replaced(void **state)
                 }
             }
         }
+        /* a gate of 20 m: the fixes of the train at V_TRUE are gated, the
+         * first held as an outlier, the second pairs with it (speed
+         * fix_at(2) - fix_at(1) over 1 s, sd sqrt(2 x 5)) */
+        c.gate_m = 20.0;
+        start(&c);
+        assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
+        assert_int_equal(step(1.0, u_hold(), fix_at(1.0), 1), HSTPF_E_OUTLIER);
+        assert_false(est().valid);
+        assert_int_equal(step(1.0, u_hold(), fix_at(2.0), 1), HSTPF_OK);
+        e = est();
+        assert_true(e.valid);
+        assert_int_equal(e.acquisitions, 2);
+        assert_int_equal(e.reacquired, 1);
+        assert_int_equal(e.outliers, 1);
+        assert_float_equal((double)e.speed_mps, fix_at(2.0) - fix_at(1.0), 3.0 * sqrt(10.0));
     }
 }
 
