@@ -72,7 +72,7 @@ for s in couple couple-near; do
 done
 # a unit stepped at 10 Hz, a fix every step: Case 1's train (noises scaled to 0.1 s) and Case 1's
 # figures taken per 0.1 s step, on the line and on the paper's run, with the traction check and without it
-for s in stops-10hz all17-10hz stops-10hz-raw all17-10hz-raw; do
+for s in stops-10hz all17-10hz stops-10hz-raw all17-10hz-raw late60-10hz fixbias20-10hz stopstep12-10hz; do
   echo "== $s"
   "$mc" --scenario "$s" --seeds "$seeds" --json "$out/$s.json" | tee "$out/$s.txt"
   "$mc" --scenario "$s" --seeds "$seeds" --no-traction-check | tee "$out/$s-nocheck.txt"

@@ -1099,6 +1099,10 @@ static const scenario_t scenarios[] = {
     {.name = "stops-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_s = 0.1},
     {.name = "all17-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .step_s = 0.1},
     {.name = "all17-10hz-raw", .paper_case = 1, .profile = HSTPF_PROFILE_PAPER, .all17 = 1, .duration_s = 1800.0, .step_s = 0.1, .step_noise_per_step = 1},
+    /* late60, fixbias20 and stopstep12 at 10 Hz (Case 1's train, noises scaled to 0.1 s) */
+    {.name = "late60-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .stuck_at_s = 1029.0, .stuck_s = 61.0, .step_s = 0.1},
+    {.name = "fixbias20-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 20.0, .fix_off_at_s = CLOCK_AT_S, .fix_off_s = 300.0, .step_s = 0.1},
+    {.name = "stopstep12-10hz", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .fix_off_m = 12.0, .fix_off_at_s = 1480.0, .fix_off_s = 60.0, .step_s = 0.1},
     {.name = "stops-10hz-raw", .paper_case = 1, .profile = HSTPF_PROFILE_JOURNEY, .all17 = 1, .duration_s = 2460.0, .tt = &line_tt, .step_s = 0.1, .step_noise_per_step = 1},
     /* the same with the unit configured for a power-up at rest (speed prior 0 +- 1 m/s): a unit that
      * starts or restarts while the train runs */
