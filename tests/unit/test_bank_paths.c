@@ -515,6 +515,24 @@ static void test_beyond_ranges_invalid(void **state)
  * 0 +- 1, one acquisition; and a lone 40 m outlier there as that fix
  * leaves it (re-placed on it, 39 m/s was published valid: a review).
  * Behind a tight gate, two gated fixes pair. Each engine. */
+/* The prior's lock, then fixes of the train at V_TRUE from t = 0: nothing
+ * valid on the prior nor on the first (its step returns rc1); the second
+ * places the models again, valid, at the speed v within tol. */
+static void replaced_by_fixes(int32_t rc1, double v, double tol)
+{
+    hstpf_estimate_t e;
+    assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
+    assert_false(est().valid);
+    assert_int_equal(step(1.0, u_hold(), fix_at(1.0), 1), rc1);
+    assert_false(est().valid);
+    assert_int_equal(step(1.0, u_hold(), fix_at(2.0), 1), HSTPF_OK);
+    e = est();
+    assert_true(e.valid);
+    assert_int_equal(e.acquisitions, 2);
+    assert_int_equal(e.reacquired, 1);
+    assert_float_equal((double)e.speed_mps, v, tol);
+}
+
 static void test_prior_confirmed_or_replaced(void **state)
 {
     int i, k, lone;
@@ -524,17 +542,7 @@ static void test_prior_confirmed_or_replaced(void **state)
         hstpf_estimate_t e;
         prior_config(&c, engines[i], 2, 0.0);
         start(&c);
-        assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
-        e = est();
-        assert_false(e.valid);
-        assert_int_equal(step(1.0, u_hold(), fix_at(1.0), 1), HSTPF_OK);
-        assert_false(est().valid);
-        assert_int_equal(step(1.0, u_hold(), fix_at(2.0), 1), HSTPF_OK);
-        e = est();
-        assert_true(e.valid);
-        assert_int_equal(e.acquisitions, 2);
-        assert_int_equal(e.reacquired, 1);
-        assert_float_equal((double)e.speed_mps, (fix_at(2.0) - fix_at(0.0)) / 2.0, 3.0 * sqrt(10.0) / 2.0);
+        replaced_by_fixes(HSTPF_OK, (fix_at(2.0) - fix_at(0.0)) / 2.0, 3.0 * sqrt(10.0) / 2.0);
         for (k = 3; k <= 30; ++k) {
             assert_int_equal(step(1.0, u_hold(), fix_at((double)k), 1), HSTPF_OK);
             e = est();
@@ -562,16 +570,8 @@ static void test_prior_confirmed_or_replaced(void **state)
          * fix_at(2) - fix_at(1) over 1 s, sd sqrt(2 x 5)) */
         c.gate_m = 20.0;
         start(&c);
-        assert_int_equal(step(1.0, u_hold(), fix_at(0.0), 1), HSTPF_OK);
-        assert_int_equal(step(1.0, u_hold(), fix_at(1.0), 1), HSTPF_E_OUTLIER);
-        assert_false(est().valid);
-        assert_int_equal(step(1.0, u_hold(), fix_at(2.0), 1), HSTPF_OK);
-        e = est();
-        assert_true(e.valid);
-        assert_int_equal(e.acquisitions, 2);
-        assert_int_equal(e.reacquired, 1);
-        assert_int_equal(e.outliers, 1);
-        assert_float_equal((double)e.speed_mps, fix_at(2.0) - fix_at(1.0), 3.0 * sqrt(10.0));
+        replaced_by_fixes(HSTPF_E_OUTLIER, fix_at(2.0) - fix_at(1.0), 3.0 * sqrt(10.0));
+        assert_int_equal(est().outliers, 1);
     }
 }
 
