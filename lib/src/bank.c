@@ -1,7 +1,8 @@
-/* The bank: life cycle, the step and the model weights (paper Eq. 14),
- * with the standstill rule. The lock is lock.c's, the declaration
- * declare.c's, the published estimate estimate.c's; how each model's state
- * and likelihood are computed is the engine's (engine.h). */
+/* The bank: life cycle and the step, with the standstill rule. The model
+ * weights are weights.c's, the traction unknown traction_unknown.c's, the
+ * lock lock.c's, the declaration declare.c's, the published estimate
+ * estimate.c's; how each model's state and likelihood are computed is the
+ * engine's (engine.h). */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -235,62 +236,6 @@ int32_t hstpf_reset(hstpf_t *f)
     return HSTPF_OK;
 }
 
-static void update_model_weights(hstpf_t *f)
-{
-    const uint16_t nh = hstpf__n_hyp(f);
-    const double lfloor = f->cfg.q_floor > 0.0 ? log(f->cfg.q_floor) : -HUGE_VAL;
-    double mx = -HUGE_VAL, sum = 0.0, lsum;
-    uint16_t l;
-    int pass;
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        f->m[l].logq += (double)f->m[l].loglik;
-    }
-    if (f->rf.active) {
-        f->rf.logq += f->rf.loglik;
-    }
-    /* Eq. 14 by log-sum-exp; then the floor, and normalise again */
-    for (pass = 0; pass < 2; ++pass) {
-        mx = -HUGE_VAL;
-        sum = 0.0;
-        for (l = 0; l < nh; ++l) {
-            mx = *hstpf__logq_of(f, l) > mx ? *hstpf__logq_of(f, l) : mx;
-        }
-        for (l = 0; l < nh; ++l) {
-            sum += exp(*hstpf__logq_of(f, l) - mx);
-        }
-        lsum = mx + log(sum);
-        for (l = 0; l < nh; ++l) {
-            double *lq = hstpf__logq_of(f, l);
-            *lq -= lsum;
-            if (pass == 0 && *lq < lfloor) {
-                *lq = lfloor;
-            }
-        }
-    }
-}
-
-/* The consist may have changed with probability p (p = 1: it did): each
- * hypothesis' weight becomes (1 - p) q + p x its prior weight (the rows'
- * (1 - refine_prior_q) / n, the continuous one's refine_prior_q), and the
- * continuous hypothesis' theta its moments under the same mixture. */
-static void consist_mix(hstpf_t *f, double p)
-{
-    const uint16_t nh = hstpf__n_hyp(f);
-    const double q0 = f->rf.active ? f->cfg.refine_prior_q : 0.0;
-    uint16_t l;
-    for (l = 0; l < nh; ++l) {
-        double *lq = hstpf__logq_of(f, l);
-        const double prior = l < f->cfg.n_models ? (1.0 - q0) / (double)f->cfg.n_models : q0;
-        *lq = log((1.0 - p) * exp(*lq) + p * prior);
-        /* and the weights a traction fault would go back to: the prior is
-         * no evidence of the traction's */
-        f->tc.logq0[l] = log((1.0 - p) * exp(f->tc.logq0[l]) + p * prior);
-    }
-    if (f->rf.active && f->rf.placed) {
-        hstpf__refine_consist(f, p);
-    }
-}
-
 int32_t hstpf_consist_changed(hstpf_t *f)
 {
     if (f == NULL) {
@@ -299,7 +244,7 @@ int32_t hstpf_consist_changed(hstpf_t *f)
     if (f->magic != HSTPF_MAGIC) {
         return HSTPF_E_INIT;
     }
-    consist_mix(f, 1.0); /* the traction check's snapshot too: the prior */
+    hstpf__consist_mix(f, 1.0); /* the traction check's snapshot too: the prior */
     clear_declaration(f, f->declared >= 0 ? HSTPF_STATUS_WITHDRAWN : HSTPF_STATUS_UNDECIDED);
     f->stop_s = 0.0;
     f->mix_pending = 0;
@@ -333,102 +278,12 @@ static int finite_models(const hstpf_t *f)
     return z <= HSTPF__STATE_MAX;
 }
 
-/* Standstill: every model that carries weight is held at rest. The data
- * then say nothing about W(v) (docs/model.md), so no model weight moves.
- * Arrival: some weighted models hold the train at rest while others still
- * move it, a few tenths of a m/s apart, or some may have come to rest
- * (HSTPF__HELD_STOPPING). A fix then scores "has it stopped yet", which
- * the fix noise decides, not W(v): the weights wait until the models
- * agree, for at most HSTPF__ARRIVAL_MAX_S counted on fixes (dt: 0 on a
- * step without one; a train that really moves then releases them).
- * Returns 2 at standstill, 1 arriving, else 0. */
-static int weights_hold(hstpf_t *f, double dt)
-{
-    double wb[HSTPF_MAX_MODELS + 1];
-    uint16_t l, held = 0, moving = 0, stopping = 0;
-    hstpf__blend_weights(f, wb);
-    for (l = 0; l <= f->cfg.n_models; ++l) {
-        const uint8_t h = l < f->cfg.n_models ? f->m[l].held : f->rf.held;
-        if (wb[l] > 0.0) {
-            held = (uint16_t)(held + (h == HSTPF__HELD_YES));
-            moving = (uint16_t)(moving + (h == HSTPF__HELD_NO));
-            stopping = (uint16_t)(stopping + (h == HSTPF__HELD_STOPPING));
-        }
-    }
-    if (moving == 0u && stopping == 0u) {
-        f->arrival_s = 0.0;
-        return 2;
-    }
-    if (held == 0u && stopping == 0u) {
-        f->arrival_s = 0.0;
-        return 0;
-    }
-    f->arrival_s += dt;
-    return f->arrival_s <= HSTPF__ARRIVAL_MAX_S ? 1 : 0;
-}
-
-/* Whether every hypothesis that carries weight put this fix beyond its
- * floor: the rows and, when it carries weight, the continuous one (while
- * it alone carries the weight, the rows' misses say nothing). */
-static int all_lost(const hstpf_t *f)
-{
-    double wb[HSTPF_MAX_MODELS + 1];
-    uint16_t l;
-    hstpf__blend_weights(f, wb);
-    for (l = 0; l < f->cfg.n_models; ++l) {
-        if (wb[l] > 0.0 && f->m[l].floor_run == 0u) {
-            return 0;
-        }
-    }
-    return !(f->rf.active && wb[f->cfg.n_models] > 0.0 && !f->rf.floored);
-}
-
 /* Time passes without a lock: only the pending fix ages. */
 static void advance_time(hstpf_t *f, double dt)
 {
     f->time_s += dt;
     f->pend_age_s += dt;
     ++f->steps;
-}
-
-/* What balances model m's resistance at speed v and the track's force at
- * its mean position, m/s^2 (a held bank's grade too: a hair is added by
- * the callers, HSTPF__FREE_HAIR). */
-static double balance(const hstpf_t *f, const hstpf_model_t *m, double v, uint16_t *hint)
-{
-    const double g = f->have_fix && f->cfg.n_track > 0u ? (double)hstpf__track_acc(f, hint, m->s_mean) : 0.0;
-    return (double)m->k0 + ((double)m->k1 + (double)m->k2 * v) * v + g;
-}
-
-/* xi u (m/s^2) for an acquisition whose traction is unknown: what
- * balances the largest resistance among the models at speed v (each
- * model's own when v < 0), plus the hair. Over the pair's second or so the
- * models' spread in W is small against the pair's speed variance; a
- * step's own is hstpf__step_xu's. */
-static double free_xu(const hstpf_t *f, double v)
-{
-    double xu = -HUGE_VAL;
-    uint16_t l, hint = 0;
-    for (l = 0; l < f->cfg.n_models + (uint16_t)hstpf__refine_on_grid(f); ++l) {
-        const hstpf_model_t *m = &f->m[l];
-        const double vl = v >= 0.0 ? v : ((double)m->v_mean > 0.0 ? (double)m->v_mean : 0.0);
-        const double w = balance(f, m, vl, &hint);
-        xu = w > xu ? w : xu;
-    }
-    return xu + HSTPF__FREE_HAIR;
-}
-
-double hstpf__step_xu(const hstpf_t *f, const hstpf_model_t *m, const hstpf__step_t *st)
-{
-    uint16_t hint = 0;
-    double v;
-    if (!st->free_run) {
-        return st->xu;
-    }
-    /* within the speed range (NaN to 0): a model gone far out gave an
-     * infinite balance, and its grid a non-finite box (the fuzz harness) */
-    v = (double)m->v_mean > 0.0 ? ((double)m->v_mean < HSTPF_SPEED_MAX ? (double)m->v_mean : HSTPF_SPEED_MAX) : 0.0;
-    return balance(f, m, v, &hint) + HSTPF__FREE_HAIR;
 }
 
 /* One step of every model and of the continuous hypothesis. */
@@ -500,7 +355,7 @@ static void prior_replace(hstpf_t *f, const hstpf_input_t *in, int free_run)
     ++f->reacquired;
     hstpf__drop_lock(f, 0);
     f->have_pend = 1;
-    (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
+    (void)hstpf__acquire(f, in->position_m, free_run ? hstpf__free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
 }
 
 int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
@@ -535,7 +390,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         if (has_y) {
             /* unknown traction: the pair's own speed sets the balance */
             const double t = f->pend_age_s, v = f->have_pend && t > 0.0 ? (in->position_m - f->pend_y) / t : 0.0;
-            (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
+            (void)hstpf__acquire(f, in->position_m, free_run ? hstpf__free_xu(f, v > 0.0 ? v : 0.0) : f->xi * in->traction);
         }
         f->standstill = 0;
         f->weights_wait = 0;
@@ -565,7 +420,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             ++f->reacquired;
             hstpf__drop_lock(f, 1);
             advance_time(f, in->dt_s);
-            (void)hstpf__acquire(f, in->position_m, free_run ? free_xu(f, -1.0) : f->xi * in->traction);
+            (void)hstpf__acquire(f, in->position_m, free_run ? hstpf__free_xu(f, -1.0) : f->xi * in->traction);
             hstpf__update_declaration(f, in->dt_s, 0);
             return HSTPF_OK;
         }
@@ -587,49 +442,15 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
     st.scale = (double)(real)sqrt(in->dt_s / f->cfg.dt_nominal_s);
     st.has_y = has_y;
     st.free_run = free_run;
-    /* the unknown acceleration as a zero-mean Gaussian on the speed, a
-     * random walk like the noises (variance in proportion to T): sd
-     * accel_unknown_sd tau over a step of tau = max(dt_nominal,
-     * HSTPF__ACC_PERSIST_S); the configured noises keep their shape and
-     * mean */
     if (free_run) {
-        /* across steps without a fix the unknown acceleration persists (a
-         * brake or a traction is held for tens of seconds, not redrawn each
-         * step): over a span t without one its variance on the speed is
-         * accel_unknown_sd^2 t max(t, tau), the random walk's up to tau
-         * and (sd t)^2 beyond. The random walk alone made a
-         * minute without any input at 300 km/h, the train braking in it,
-         * 13-23 m/s off at 3-6 sd (hstpf-mc --scenario silent) */
-        const double a2 = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd;
-        const double dn = f->cfg.dt_nominal_s > HSTPF__ACC_PERSIST_S ? f->cfg.dt_nominal_s : HSTPF__ACC_PERSIST_S;
-        /* no longer than it takes the acceleration to span the speed
-         * range: beyond, the spread grew without bound and the grid's box
-         * went non-finite (the fuzz harness, a NaN cast in grid_box.c) */
-        const double t_max = HSTPF_SPEED_MAX / f->cfg.accel_unknown_sd;
-        const double u = f->free_s < t_max ? f->free_s : t_max, w = u + in->dt_s < t_max ? u + in->dt_s : t_max;
-        st.acc_var = a2 * (w * (w > dn ? w : dn) - u * (u > dn ? u : dn));
-        f->free_s = has_y ? 0.0 : w;
+        st.acc_var = hstpf__free_acc_var(f, in->dt_s, has_y);
     } else {
         st.acc_var = 0.0;
         f->free_s = 0.0;
     }
     engines_step(f, e, &st);
     {
-        /* the arrival's wait runs on fixes, each the time since the one
-         * before but no more than the gap before that (or dt_nominal_s):
-         * an outage across a stop spent it with none to weigh, and the
-         * first fix after it moved the weights while the rows still
-         * disagreed on having stopped (hstpf-mc --scenario outage-stop: TV
-         * up to 0.41 across the stop); counted per step with a fix, 10 Hz
-         * steps with a fix a second made it 100 s (a review) */
-        const double cap = f->fix_gap_s > f->cfg.dt_nominal_s ? f->fix_gap_s : f->cfg.dt_nominal_s;
-        int hold;
-        f->fix_age_s += in->dt_s;
-        hold = weights_hold(f, has_y ? (f->fix_age_s < cap ? f->fix_age_s : cap) : 0.0);
-        if (has_y) {
-            f->fix_gap_s = f->fix_age_s;
-            f->fix_age_s = 0.0;
-        }
+        const int hold = hstpf__weights_hold(f, in->dt_s, has_y);
         f->standstill = (uint8_t)(hold == 2);
         f->weights_wait = (uint8_t)(hold != 0);
         /* one standstill's length; when one of HSTPF_CONSIST_STOP_S ends,
@@ -645,7 +466,7 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
         /* every model that carries weight put this fix beyond its floor:
          * the fixes and the estimate disagree (a train moving although
          * held, a time base that broke); a run of these re-acquires */
-        f->lost_run = all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
+        f->lost_run = hstpf__all_lost(f) ? (uint16_t)(f->lost_run + (f->lost_run < UINT16_MAX)) : 0u;
     }
     {
         /* a step whose traction is unknown, a lone outlier and a lock on
@@ -667,10 +488,10 @@ int32_t hstpf_step(hstpf_t *f, const hstpf_input_t *in)
             !f->tc.doubt;
     if (weigh) {
         if (f->mix_pending && f->cfg.consist_change_p > 0.0) {
-            consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a long stop */
+            hstpf__consist_mix(f, f->cfg.consist_change_p); /* the first evidence after a long stop */
         }
         f->mix_pending = 0;
-        update_model_weights(f);
+        hstpf__update_model_weights(f);
     }
     if (has_y && f->cfg.model_reacquire_after > 0u) {
         hstpf__models_reacquire(f, (real)st.yr);

@@ -27,6 +27,22 @@ static inline uint16_t hstpf__n_hyp(const hstpf_t *f)
     return (uint16_t)(f->cfg.n_models + f->rf.active);
 }
 
+/* weights.c: Eq. 14 with the floor; the consist changed with
+ * probability p; 2 at a standstill, 1 arriving (the weights wait), else 0,
+ * its clock run on fixes; every weighted hypothesis beyond its floor. */
+void hstpf__update_model_weights(hstpf_t *f);
+void hstpf__consist_mix(hstpf_t *f, double p);
+int hstpf__weights_hold(hstpf_t *f, double dt, int has_y);
+int hstpf__all_lost(const hstpf_t *f);
+
+/* traction_unknown.c: xi u for an acquisition whose traction is unknown
+ * (v < 0: each model's own speed); how long an unknown acceleration
+ * persists, max(dt_nominal_s, HSTPF__ACC_PERSIST_S); its variance on the
+ * speed over a step of dt (the span without a fix kept in f->free_s). */
+double hstpf__free_xu(const hstpf_t *f, double v);
+double hstpf__acc_tau(const hstpf_t *f);
+double hstpf__free_acc_var(hstpf_t *f, double dt, int has_y);
+
 /* lock.c */
 int hstpf__acquire(hstpf_t *f, double y, double xu);
 void hstpf__drop_lock(hstpf_t *f, int keep_pend);

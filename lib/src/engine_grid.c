@@ -399,7 +399,7 @@ static void anchor_lost(hstpf_t *f)
  * fix in a heavy tail puts that Gaussian ratio far beyond the exact
  * densities'). It publishes the leader's state, which the grid has exactly
  * under the fixes' real noise, and the leader's floor counts (so a fix
- * every weighted model misses is still told, bank.c all_lost); whether it
+ * every weighted model misses is still told, weights.c, hstpf__all_lost); whether it
  * is held at rest stays its own filter's (the leader's gave larger weight
  * moves across stops: stops-t TV max 0.13 against 0.024, 5 seeds); a filter of
  * its own that missed the fix or lost the train (hstpf__kalman_lost, against

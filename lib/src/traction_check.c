@@ -126,8 +126,7 @@ void hstpf__trac_check_end(hstpf_t *f, const hstpf__step_t *bank_st, int test, i
     /* the shadow does not use the traction: acceleration 0 with accel_unknown_sd */
     st.free_run = 1;
     st.xu = shadow_xu(f, &hint, c->sh.kx[0]);
-    st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt *
-                 (f->cfg.dt_nominal_s > HSTPF__ACC_PERSIST_S ? f->cfg.dt_nominal_s : HSTPF__ACC_PERSIST_S);
+    st.acc_var = f->cfg.accel_unknown_sd * f->cfg.accel_unknown_sd * st.dt * hstpf__acc_tau(f);
     {
         /* in the bank's parts (bank.c): in one, a long step's unknown
          * acceleration left out its T^2 spread of the position, and a
