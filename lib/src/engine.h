@@ -1,8 +1,8 @@
 /* The one internal interface every estimation engine implements. The bank
  * (bank.c, weights.c) owns the model weights, the declaration and the
  * blend; an engine owns how each model's state and likelihood are
- * computed. The engine of an
- * instance is chosen once, in hstpf__engine_select(). */
+ * computed. The engine of an instance is chosen once, in
+ * hstpf__engine_select(). */
 #ifndef HSTPF_ENGINE_H
 #define HSTPF_ENGINE_H
 
